@@ -1,0 +1,57 @@
+"""Matplotlib figures from jaxrod results (the numerics never import this module)."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg") if not matplotlib.get_backend().lower().startswith("module://") else None
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from jaxrod.analysis.greenhill import greenhill_load, paper_bounds, stability_curve  # noqa: E402
+
+
+def stability_diagram_figure(report: dict | None = None, G_range=(1e-2, 1e3), points: int = 200):
+    """(G, A) stability diagram for both supports, paper bounds dashed, A2 against G.
+
+    ``report`` (from ``jaxrod.reproduce.uniform_field_report``) places the experiments.
+    """
+    G = np.geomspace(*G_range, points)
+    g_crit = greenhill_load()
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12, 4.8))
+    colours = {"clamped": "C0", "pinned": "C1"}
+    for support, colour in colours.items():
+        a_crit, a2 = stability_curve(G, support)
+        ax.plot(G, a_crit, color=colour, lw=2, label=f"{support}: exact A_crit = -beta0(G)")
+        bounds = np.array([paper_bounds(g, support, g_crit) for g in G])
+        ax.plot(G, bounds[:, 0], "--", color=colour, lw=1, label=f"{support}: paper's bounds")
+        ax.plot(G, bounds[:, 1], "--", color=colour, lw=1)
+        ax2.plot(G, a2, color=colour, lw=2, label=f"{support}")
+    ax.axvline(g_crit, color="0.5", lw=0.8, ls=":")
+    ax.text(g_crit * 1.05, 2e-2, "G_crit", color="0.4")
+    if report is not None:
+        for key, marker in (("clamped", "o"), ("pinned", "s")):
+            rows = report[key]
+            ax.scatter([r["G"] for r in rows], [r["A"] for r in rows], marker=marker,
+                       color=colours[key], edgecolor="k", zorder=5,
+                       label=f"{key} experiments (field on)")
+            for r in rows:
+                ax.scatter([r["G"]], [1.2e-2], marker="x", color=colours[key],
+                           zorder=5)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_ylim(1e-2, 2e3)
+    ax.set_xlabel("G (gravity)")
+    ax.set_ylabel("A (anisotropy)")
+    ax.set_title("upright rod stable above each curve (x: field off, A = 0)")
+    ax.legend(fontsize=7, loc="upper left")
+    ax2.axhline(0.0, color="0.5", lw=0.8)
+    ax2.set_xscale("log")
+    ax2.set_yscale("symlog", linthresh=1e-2)
+    ax2.set_xlabel("G")
+    ax2.set_ylabel("A2  (A = A_crit + A2 r^2)")
+    ax2.set_title("pitchfork coefficient: < 0 supercritical, > 0 subcritical")
+    ax2.legend()
+    fig.tight_layout()
+    return fig

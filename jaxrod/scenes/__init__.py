@@ -1,0 +1,3 @@
+"""Scenes: the energy terms each physical set-up needs, and nothing else."""
+
+from jaxrod.scenes.uniform import UniformField as UniformField

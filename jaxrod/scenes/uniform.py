@@ -1,0 +1,33 @@
+"""The uniform-field scene: an upright rod in a vertical saturating field m = e3.
+
+Energy (paper, eq. uniform_field_energy), Zeeman term constant and left out:
+
+    E_unif[theta] = 1/2 int theta'^2 + A/2 int sin^2(theta) + G int (1 - s) cos(theta),
+
+with the support (clamped: theta(0) = 0; pinned: free) carried by the discretisation.
+The straight rod theta = 0 is an equilibrium for every (G, A); its Hessian is the discrete
+form of the second variation int [u'^2 + (A - G (1 - s)) u^2] (Corollary "Second variation
+at the gravity-opposed straight state").
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+
+from jaxrod.discretise.planar import PlanarDiscretisation
+from jaxrod.scenes.terms import anisotropy_energy, bending_energy, gravity_energy
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class UniformField:
+    """Scene parameters (G, A); both are traced, so changing them never recompiles."""
+
+    G: jax.Array | float
+    A: jax.Array | float
+
+    def energy(self, theta: jax.Array, disc: PlanarDiscretisation) -> jax.Array:
+        return (bending_energy(theta, disc) + gravity_energy(theta, disc, self.G)
+                + anisotropy_energy(theta, disc, self.A))
