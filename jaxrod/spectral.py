@@ -48,12 +48,14 @@ def _check_degree(n: int) -> int:
     return int(n)
 
 
+def _reference_points(n: int) -> np.ndarray:
+    """x_j = cos(j pi / n) on [-1, 1], in the sin form that makes x_{n-j} = -x_j exactly."""
+    return np.sin(np.pi * (n - 2 * np.arange(n + 1)) / (2 * n))
+
+
 def chebyshev_nodes(n: int) -> np.ndarray:
     """The n + 1 Chebyshev points of the second kind on [0, 1], ascending from s = 0."""
-    n = _check_degree(n)
-    j = np.arange(n + 1)
-    # sin form of (1 - cos(j pi/n))/2: exact symmetry s_j + s_{n-j} = 1 and no cancellation
-    return np.sin(np.pi * j / (2 * n)) ** 2
+    return 0.5 * (1.0 - _reference_points(_check_degree(n)))
 
 
 def barycentric_weights(n: int) -> np.ndarray:
@@ -72,7 +74,7 @@ def barycentric_weights(n: int) -> np.ndarray:
 def differentiation_matrix(n: int) -> np.ndarray:
     """(n+1) x (n+1) matrix D with (D f)_j = p'(s_j) for the interpolant p of f."""
     n = _check_degree(n)
-    x = np.cos(np.pi * np.arange(n + 1) / n)
+    x = _reference_points(n)
     c = np.ones(n + 1)
     c[0] = c[-1] = 2.0
     c *= (-1.0) ** np.arange(n + 1)
@@ -92,7 +94,8 @@ def clenshaw_curtis_weights(n: int) -> np.ndarray:
         v -= b * np.cos(2 * k * theta) / (4 * k * k - 1)
     c = np.full(n + 1, 2.0)
     c[0] = c[-1] = 1.0
-    return c * v / (2 * n)
+    w = c * v / (2 * n)
+    return 0.5 * (w + w[::-1])  # exactly symmetric, as the rule is
 
 
 def values_to_coefficients_matrix(n: int) -> np.ndarray:
@@ -116,8 +119,7 @@ def cumulative_integration_matrix(n: int) -> np.ndarray:
     for k in range(2, n + 1):
         integ[k + 1, k] += 1.0 / (2 * (k + 1))
         integ[k - 1, k] -= 1.0 / (2 * (k - 1))
-    x = np.cos(np.pi * np.arange(n + 1) / n)
-    tk = np.cos(np.outer(np.arccos(np.clip(x, -1, 1)), np.arange(n + 2)))  # T_k(x_j)
+    tk = np.cos(np.outer(np.pi * np.arange(n + 1) / n, np.arange(n + 2)))  # T_k(x_j)
     anti_x = tk @ integ @ a  # F(x_j) with F' = p in x
     # int_0^{s} p ds' = -(1/2) int_{1}^{x} p dx' = (F(1) - F(x)) / 2, and x = 1 at s = 0.
     return 0.5 * (anti_x[0][None, :] - anti_x)
