@@ -32,38 +32,31 @@ class ParameterError(ValueError):
     """An input outside its valid range; the message names the parameter and the range."""
 
 
-def check_positive(name: str, value, unit: str = "") -> float:
-    """Return ``value`` as a float if it is a finite number > 0, else raise."""
-    suffix = f" {unit}" if unit else ""
+def _check(name: str, value, ok, requirement: str) -> float:
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a finite number > 0{suffix}, got {value!r}") from None
-    if not math.isfinite(x) or x <= 0.0:
-        raise ParameterError(f"{name} must be a finite number > 0{suffix}, got {value!r}")
+        x = math.nan
+    if not (math.isfinite(x) and ok(x)):
+        raise ParameterError(f"{name} must be {requirement}, got {value!r}")
     return x
+
+
+def check_positive(name: str, value, unit: str = "") -> float:
+    """Return ``value`` as a float if it is a finite number > 0, else raise."""
+    return _check(name, value, lambda x: x > 0.0,
+                  f"a finite number > 0{' ' + unit if unit else ''}")
 
 
 def check_nonnegative(name: str, value, unit: str = "") -> float:
     """Return ``value`` as a float if it is a finite number >= 0, else raise."""
-    suffix = f" {unit}" if unit else ""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a finite number >= 0{suffix}, got {value!r}") from None
-    if not math.isfinite(x) or x < 0.0:
-        raise ParameterError(f"{name} must be a finite number >= 0{suffix}, got {value!r}")
-    return x
+    return _check(name, value, lambda x: x >= 0.0,
+                  f"a finite number >= 0{' ' + unit if unit else ''}")
 
 
 def check_finite(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a finite number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ParameterError(f"{name} must be a finite number, got {value!r}")
-    return x
+    """Return ``value`` as a float if it is finite, else raise."""
+    return _check(name, value, lambda x: True, "a finite number")
 
 
 @dataclasses.dataclass(frozen=True)

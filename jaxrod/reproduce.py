@@ -13,8 +13,8 @@ import math
 
 from jaxrod.analysis.greenhill import (
     AIRY_A1_PRIME,
-    criticality_switch_load,
     critical_length,
+    criticality_switch_load,
     greenhill,
     greenhill_load,
 )

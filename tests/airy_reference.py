@@ -74,4 +74,4 @@ def pitchfork_coefficient(G, support):
     """A2 = 1/6 int (4 A_crit - G (1 - s)) u^4 by adaptive quadrature of the Airy solution."""
     beta, u = eigenfunction(G, support)
     integrand = lambda s: (4.0 * (-beta) - G * (1.0 - s)) * u(s) ** 4
-    return quad(integrand, 0.0, 1.0, epsabs=0, epsrel=1e-13, limit=200)[0] / 6.0
+    return quad(integrand, 0.0, 1.0, epsabs=0, epsrel=1e-12, limit=200)[0] / 6.0
