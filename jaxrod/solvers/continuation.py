@@ -1,0 +1,190 @@
+"""Pseudo-arclength continuation of equilibria of a parametrised energy E(x, lam).
+
+Equilibria solve F(x, lam) = grad_x E(x, lam) = 0. With y = (x, lam) and the weighted inner
+product <a, b> = a_x . b_x / m + a_lam b_lam (m = len(x), so a change of the state is
+measured by its RMS), one step from the point y_k with unit tangent t_k is (Keller):
+
+    predictor   y_p = y_k + ds t_k
+    corrector   F(y) = 0,  <t_k, y - y_p> = 0          (Newton, ``jaxrod.solvers.newton``)
+    tangent     [F_x  F_lam; t_k^T W] t = [0; 1],  t_{k+1} = t / |t|
+
+The bordered Jacobian is regular at simple folds, so the branch is followed round them.
+The step adapts: it grows by ``growth`` after an easy corrector (<= 3 Newton steps), and is
+halved after a failed corrector or a tangent turning by more than ~25 degrees; below
+``ds_min`` the run stops with ``STEP_TOO_SMALL``. Along the branch the Hessian F_x is
+symmetric; its smallest eigenvalue and number of negative eigenvalues (the Morse index) give
+the stability, and a sign change of the parameter component of the tangent marks a fold.
+
+The whole run is one ``lax.while_loop`` over fixed-capacity arrays (NaN padded beyond
+``num_points``): jit-compiled once per (energy function, problem size, capacity).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from jaxrod.solvers.newton import newton
+
+RUNNING, REACHED_BOUND, CAPACITY_FULL, STEP_TOO_SMALL = 0, 1, 2, 3
+STATUS_MESSAGES = {
+    RUNNING: "running",
+    REACHED_BOUND: "reached the parameter bound",
+    CAPACITY_FULL: "stopped: max_points reached before the parameter bound (raise max_points "
+    "or ds_max)",
+    STEP_TOO_SMALL: "stopped: the corrector failed even at the minimum step ds_min (a branch "
+    "point, a singular bordered Jacobian or a too-coarse discretisation)",
+}
+
+Energy = Callable[[jax.Array, jax.Array, Any], jax.Array]
+
+
+class ContinuationOptions(NamedTuple):
+    """Step control. ``max_points`` is static (array capacity); the others are traced."""
+
+    ds: float = 0.02
+    ds_min: float = 1e-7
+    ds_max: float = 0.1
+    growth: float = 1.5
+    lam_min: float = -jnp.inf
+    lam_max: float = jnp.inf
+    tol: float = 1e-12
+    max_points: int = 400
+
+
+class RawBranch(NamedTuple):
+    """Device arrays of a continuation run (first ``num_points`` rows valid)."""
+
+    x: jax.Array  # (capacity, m)
+    lam: jax.Array  # (capacity,)
+    tangent_lam: jax.Array  # (capacity,)
+    min_eig: jax.Array  # (capacity,)
+    morse_index: jax.Array  # (capacity,)
+    newton_iterations: jax.Array  # (capacity,)
+    residual_norm: jax.Array  # (capacity,)
+    num_points: jax.Array
+    status: jax.Array
+    rejected_steps: jax.Array
+
+
+def _gradient(energy: Energy):
+    return jax.grad(energy, argnums=0)
+
+
+def _wdot(a, b, m):
+    return jnp.dot(a[:-1], b[:-1]) / m + a[-1] * b[-1]
+
+
+def _bordered(energy: Energy, y, t, args):
+    """[F_x F_lam; t^T W] at y (the Jacobian of the corrector system)."""
+    m = y.shape[0] - 1
+    F = lambda z: _gradient(energy)(z[:-1], z[-1], args)
+    J = jax.jacfwd(F)(y)
+    w = jnp.append(jnp.full(m, 1.0 / m), 1.0)
+    return jnp.vstack([J, (w * t)[None, :]]), J[:, :-1]
+
+
+def _corrector_residual(z, data):
+    energy, y_pred, t, args = data
+    m = z.shape[0] - 1
+    F = _gradient(energy)(z[:-1], z[-1], args)
+    return jnp.append(F, _wdot(t, z - y_pred, m))
+
+
+def initial_tangent(energy: Energy, x0, lam0, args, direction: float = 1.0):
+    """Unit tangent at a regular point, oriented so that d lam has the sign of ``direction``."""
+    y = jnp.append(x0, lam0)
+    e = jnp.zeros_like(y).at[-1].set(1.0)
+    B, _ = _bordered(energy, y, e, args)
+    rhs = jnp.zeros_like(y).at[-1].set(1.0)
+    t = jnp.linalg.solve(B, rhs)
+    t = t / jnp.sqrt(_wdot(t, t, y.shape[0] - 1))
+    return jnp.sign(direction) * t
+
+
+class _State(NamedTuple):
+    y: jax.Array
+    t: jax.Array
+    ds: jax.Array
+    k: jax.Array
+    rejected: jax.Array
+    status: jax.Array
+    out: RawBranch
+
+
+def _spectrum(H):
+    ev = jnp.linalg.eigvalsh(0.5 * (H + H.T))
+    return ev[0], jnp.sum(ev < 0)
+
+
+def pseudo_arclength(energy: Energy, x0: jax.Array, lam0, args: Any,
+                     options: ContinuationOptions = ContinuationOptions(),
+                     direction: float = 1.0) -> RawBranch:
+    """Trace the equilibrium branch of ``energy`` through the converged point (x0, lam0).
+
+    ``energy(x, lam, args)`` must be a pure function; pass the same function object each
+    time (not a new closure) so that the compiled program is reused.
+    """
+    return _pseudo_arclength(energy, jnp.asarray(x0, jnp.float64), jnp.asarray(lam0, jnp.float64),
+                             args, options._replace(max_points=0), options.max_points, direction)
+
+
+def _pseudo_arclength_impl(energy, x0, lam0, args, opts, capacity, direction):
+    m = x0.shape[0]
+    y0 = jnp.append(x0, lam0)
+    t0 = initial_tangent(energy, x0, lam0, args, direction)
+    nan = jnp.full(capacity, jnp.nan)
+    out = RawBranch(
+        x=jnp.full((capacity, m), jnp.nan), lam=nan, tangent_lam=nan, min_eig=nan,
+        morse_index=jnp.full(capacity, -1), newton_iterations=jnp.full(capacity, -1),
+        residual_norm=nan, num_points=jnp.asarray(0), status=jnp.asarray(RUNNING),
+        rejected_steps=jnp.asarray(0))
+
+    def record(out: RawBranch, k, y, t, iters, res):
+        _, H = _bordered(energy, y, t, args)
+        lo, index = _spectrum(H)
+        return out._replace(
+            x=out.x.at[k].set(y[:-1]), lam=out.lam.at[k].set(y[-1]),
+            tangent_lam=out.tangent_lam.at[k].set(t[-1]), min_eig=out.min_eig.at[k].set(lo),
+            morse_index=out.morse_index.at[k].set(index),
+            newton_iterations=out.newton_iterations.at[k].set(iters),
+            residual_norm=out.residual_norm.at[k].set(res))
+
+    F0 = jnp.max(jnp.abs(_gradient(energy)(x0, lam0, args)))
+    out = record(out, 0, y0, t0, 0, F0)
+
+    def step(s: _State) -> _State:
+        y_pred = s.y + s.ds * s.t
+        res = newton(_corrector_residual, y_pred, (energy, y_pred, s.t, args), tol=opts.tol)
+        B, _ = _bordered(energy, res.x, s.t, args)
+        t_new = jnp.linalg.solve(B, jnp.zeros_like(s.y).at[-1].set(1.0))
+        t_new = t_new / jnp.sqrt(_wdot(t_new, t_new, m))
+        turn_ok = _wdot(t_new, s.t, m) > 0.9
+        accept = res.converged & turn_ok & jnp.all(jnp.isfinite(t_new))
+        k = s.k + jnp.where(accept, 1, 0)
+        new_out = jax.lax.cond(
+            accept, lambda o: record(o, k, res.x, t_new, res.iterations, res.residual_norm),
+            lambda o: o, s.out)
+        ds = jnp.where(accept,
+                       jnp.where(res.iterations <= 3, jnp.minimum(s.ds * opts.growth, opts.ds_max),
+                                 s.ds),
+                       0.5 * s.ds)
+        y = jnp.where(accept, res.x, s.y)
+        t = jnp.where(accept, t_new, s.t)
+        lam = y[-1]
+        status = jnp.where(accept & ((lam > opts.lam_max) | (lam < opts.lam_min)), REACHED_BOUND,
+                           jnp.where(k >= capacity - 1, CAPACITY_FULL,
+                                     jnp.where(ds < opts.ds_min, STEP_TOO_SMALL, RUNNING)))
+        return _State(y, t, ds, k, s.rejected + jnp.where(accept, 0, 1), status, new_out)
+
+    init = _State(y0, t0, jnp.asarray(opts.ds, jnp.float64), jnp.asarray(0), jnp.asarray(0),
+                  jnp.asarray(RUNNING), out)
+    final = jax.lax.while_loop(lambda s: s.status == RUNNING, step, init)
+    return final.out._replace(num_points=final.k + 1, status=final.status,
+                              rejected_steps=final.rejected)
+
+
+_pseudo_arclength = jax.jit(_pseudo_arclength_impl, static_argnums=(0, 5))
