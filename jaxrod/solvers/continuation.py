@@ -132,7 +132,9 @@ def pseudo_arclength(energy: Energy, x0: jax.Array, lam0, args: Any,
                              args, options._replace(max_points=0), options.max_points, direction)
 
 
-def _pseudo_arclength_impl(energy, x0, lam0, args, opts, capacity, direction):
+def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, capacity: int,
+                     direction) -> RawBranch:
+    """Traceable core of ``pseudo_arclength`` (``capacity`` static; vmappable over direction)."""
     m = x0.shape[0]
     y0 = jnp.append(x0, lam0)
     t0 = initial_tangent(energy, x0, lam0, args, direction)
@@ -187,4 +189,4 @@ def _pseudo_arclength_impl(energy, x0, lam0, args, opts, capacity, direction):
                               rejected_steps=final.rejected)
 
 
-_pseudo_arclength = jax.jit(_pseudo_arclength_impl, static_argnums=(0, 5))
+_pseudo_arclength = jax.jit(continuation_run, static_argnums=(0, 5))

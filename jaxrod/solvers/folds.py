@@ -63,12 +63,15 @@ def _solve_fold(energy, x0, lam0, phi0, args, tol):
     return FoldPoint(res.x[:m], res.x[-1], res.x[m:2 * m], res)
 
 
-moore_spence = jax.jit(_solve_fold, static_argnums=0)
-moore_spence.__doc__ = """Solve the Moore-Spence system from (x0, lam0) and null-vector guess phi0.
+def moore_spence_solve(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13) -> FoldPoint:
+    """Solve the Moore-Spence system from (x0, lam0) and null-vector guess phi0 (traceable).
 
-Arguments: ``(energy, x0, lam0, phi0, args, tol)``; ``energy`` is static. The returned
-``null_vector`` is normalised by l . phi = 1 with l = phi0 / |phi0|^2.
-"""
+    The returned ``null_vector`` is normalised by l . phi = 1 with l = phi0 / |phi0|^2.
+    """
+    return _solve_fold(energy, x0, lam0, phi0, args, tol)
+
+
+moore_spence = jax.jit(moore_spence_solve, static_argnums=0)
 
 
 def fold_coefficients(energy: Energy, x, lam, phi, args, mean: Callable[[jax.Array], Any]):

@@ -1,0 +1,107 @@
+"""``Branch``: a traced equilibrium branch on the host, with stability and folds."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from jaxrod.solvers.continuation import STATUS_MESSAGES, RawBranch
+
+
+@dataclasses.dataclass(frozen=True)
+class Branch:
+    """Equilibria along a parameter (struct of arrays, first axis = branch point).
+
+    Attributes:
+      alpha: the continuation parameter (radians for the magnet angle).
+      theta: discrete states (free nodal values).
+      q, tip, energy: recorded observables (q = int theta, tip angle in radians).
+      min_eig, morse_index: smallest Hessian eigenvalue and number of negative ones.
+      tangent_alpha: parameter component of the unit tangent (changes sign at folds).
+      newton_iterations, residual_norm: corrector diagnostics per point.
+      status: why each traced segment stopped.
+    """
+
+    alpha: np.ndarray
+    theta: np.ndarray
+    q: np.ndarray
+    tip: np.ndarray
+    energy: np.ndarray
+    min_eig: np.ndarray
+    morse_index: np.ndarray
+    tangent_alpha: np.ndarray
+    newton_iterations: np.ndarray
+    residual_norm: np.ndarray
+    status: tuple[str, ...]
+    complete: bool
+
+    @property
+    def stable(self) -> np.ndarray:
+        return self.morse_index == 0
+
+    @property
+    def fold_indices(self) -> np.ndarray:
+        """i such that a fold lies between points i and i + 1 (d alpha/ds changes sign)."""
+        t = self.tangent_alpha
+        return np.nonzero(np.sign(t[:-1]) * np.sign(t[1:]) < 0)[0]
+
+    def __len__(self) -> int:
+        return self.alpha.shape[0]
+
+    def write_csv(self, path: Path) -> None:
+        with open(path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["alpha_deg", "q", "tip_deg", "energy", "min_eig", "stable"])
+            for i in range(len(self)):
+                w.writerow([f"{np.degrees(self.alpha[i]):.12g}", f"{self.q[i]:.12g}",
+                            f"{np.degrees(self.tip[i]):.12g}", f"{self.energy[i]:.12g}",
+                            f"{self.min_eig[i]:.6g}", int(self.stable[i])])
+
+    def plot(self, ax=None, y: str = "tip"):
+        """Tip angle (or q) against alpha in degrees; stable solid, unstable dashed."""
+        import matplotlib.pyplot as plt
+
+        ax = ax or plt.gca()
+        a = np.degrees(self.alpha)
+        v = np.degrees(self.tip) if y == "tip" else self.q
+        stable = self.stable
+        for mask, style, label in ((stable, "-", "stable"), (~stable, "--", "unstable")):
+            vv = np.where(mask, v, np.nan)
+            ax.plot(a, vv, style, color="C0" if style == "-" else "C3", label=label)
+        f = self.fold_indices
+        ax.plot(a[f], v[f], "kx", label="fold (detected)")
+        ax.set_xlabel("magnet angle alpha (deg)")
+        ax.set_ylabel("tip angle (deg)" if y == "tip" else "q = int theta")
+        return ax
+
+
+def branch_from_runs(runs: list[tuple[RawBranch, bool]], observables) -> Branch:
+    """Concatenate continuation runs (each optionally reversed) into one ``Branch``.
+
+    ``observables(theta_batch, alpha_batch) -> (q, tip, energy)`` evaluates the recorded
+    scalars on the host side in one vectorised call.
+    """
+    parts, status, complete = [], [], True
+    for raw, reverse in runs:
+        k = int(raw.num_points)
+        fields = {f: np.asarray(getattr(raw, f))[:k] for f in
+                  ("x", "lam", "tangent_lam", "min_eig", "morse_index", "newton_iterations",
+                   "residual_norm")}
+        if reverse:
+            fields = {f: v[::-1] for f, v in fields.items()}
+            fields["tangent_lam"] = -fields["tangent_lam"]
+        parts.append(fields)
+        status.append(STATUS_MESSAGES[int(raw.status)])
+        complete &= int(raw.status) == 1
+    # runs share their starting point: drop the duplicate
+    if len(parts) == 2:
+        parts[1] = {f: v[1:] for f, v in parts[1].items()}
+    cat = {f: np.concatenate([p[f] for p in parts]) for f in parts[0]}
+    q, tip, energy = (np.asarray(v) for v in observables(cat["x"], cat["lam"]))
+    return Branch(alpha=cat["lam"], theta=cat["x"], q=q, tip=tip, energy=energy,
+                  min_eig=cat["min_eig"], morse_index=cat["morse_index"],
+                  tangent_alpha=cat["tangent_lam"], newton_iterations=cat["newton_iterations"],
+                  residual_norm=cat["residual_norm"], status=tuple(status), complete=complete)

@@ -1,0 +1,316 @@
+"""Permanent magnet on a circle: bifurcation diagram, folds and hysteresis (paper, section
+"Permanent Magnet on Sphere").
+
+Pipeline: ``trace_diagram`` follows the planar equilibria from the straight rod at alpha = 0
+in both directions by pseudo-arclength continuation (engaged branch, upper fold, unstable
+middle branch, lower fold, disengaged branch); ``locate_folds`` refines each detected fold by
+the Moore-Spence system and reports the normal form; ``hysteresis_sweep`` runs the
+experiment's quasi-static protocol; ``square_root_law`` fits the exponent of
+|tip - tip*| ~ |alpha - alpha*|^(1/2) next to a fold.
+
+Everything is in radians internally; results carry degrees where the name says ``_deg``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.analysis.branch import Branch, branch_from_runs
+from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
+from jaxrod.params import ParameterError, check_groups, check_track_clearance
+from jaxrod.scenes.dipole import DipoleMagnet, tip_angle, tip_position
+from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
+from jaxrod.solvers.descent import descend
+from jaxrod.solvers.folds import fold_coefficients, moore_spence_solve
+from jaxrod.solvers.newton import newton
+
+#: Default Chebyshev degree. At the paper's parameters the fold angles reach their round-off
+#: floor (~1e-11 degrees) from N = 12 (benchmarks/magnet_convergence.py); 16 keeps a margin.
+#: Small clearances D - 1 need more (benchmarks/magnet_extreme.py).
+DEFAULT_N = 16
+
+
+def alpha_energy(theta, alpha, args):
+    """E_perm(theta) at magnet angle alpha; args = (scene, disc). The continuation energy."""
+    scene, disc = args
+    return scene.with_alpha(alpha).energy(theta, disc)
+
+
+def make_scene(G: float, M: float, D: float, magnet_radius: float | None = None) -> DipoleMagnet:
+    """Validated scene. ``magnet_radius`` (a/L) refuses magnets the rod could touch."""
+    check_groups(G=G, M=M)
+    check_track_clearance(D, 0.0 if magnet_radius is None else magnet_radius)
+    return DipoleMagnet(float(G), float(M), float(D), 0.0)
+
+
+@jax.jit
+def _observables(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
+    one = lambda th, a: (disc.mean(th), tip_angle(th, disc),
+                         scene.with_alpha(a).energy(th, disc))
+    return jax.vmap(one)(theta, alpha)
+
+
+def default_options(max_points: int = 400) -> ContinuationOptions:
+    return ContinuationOptions(ds=0.05, ds_min=1e-8, ds_max=0.25, lam_min=-math.pi / 2,
+                               lam_max=math.pi / 2, tol=1e-12, max_points=max_points)
+
+
+@functools.partial(jax.jit, static_argnames="capacity")
+def _diagram(scene: DipoleMagnet, disc: PlanarDiscretisation, options: ContinuationOptions,
+             capacity: int):
+    start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc))
+    trace = lambda d: continuation_run(alpha_energy, start.x, 0.0, (scene, disc), options,
+                                       capacity, d)
+    return start, jax.vmap(trace)(jnp.array([-1.0, 1.0]))
+
+
+def _alpha_residual(theta, args):
+    alpha, scene, disc = args
+    return jax.grad(alpha_energy)(theta, alpha, (scene, disc))
+
+
+def trace_diagram(scene: DipoleMagnet, n: int = DEFAULT_N,
+                  options: ContinuationOptions | None = None) -> Branch:
+    """The whole planar diagram for alpha in [-90, 90] degrees through the straight rod.
+
+    One compiled program runs both directions from (theta, alpha) = (0, 0) (vmapped).
+    """
+    disc = planar_discretisation(n, "clamped")
+    options = options or default_options()
+    start, runs = _diagram(scene, disc, options._replace(max_points=0), options.max_points)
+    if not bool(start.converged):
+        raise RuntimeError(f"no equilibrium at alpha = 0: {start.message()}")
+    left, right = (jax.tree_util.tree_map(lambda v, i=i: v[i], runs) for i in (0, 1))
+    return branch_from_runs([(left, True), (right, False)],
+                            lambda th, a: _observables(th, a, scene, disc))
+
+
+@dataclasses.dataclass(frozen=True)
+class Fold:
+    """A saddle-node of the planar branch, refined by Moore-Spence.
+
+    ``normal_form_c``: alpha - alpha* ~ c (q - q*)^2 (radians); ``tip_parabola_c``:
+    alpha - alpha* ~ c_tip (tip - tip*)^2 (radians; the paper's Corollary "Fold in the
+    experimental tip displacement angle", c_tip = -F_qq / (2 F_alpha T*^2)).
+    """
+
+    kind: str
+    alpha_deg: float
+    q: float
+    tip_deg: float
+    dF_dalpha: float
+    d2F_dq2: float
+    normal_form_c: float
+    tip_parabola_c: float
+    opens: str
+    hessian_smallest: tuple[float, float]
+    null_vector: np.ndarray
+    theta: np.ndarray
+    converged: bool
+    residual_norm: float
+    iterations: int
+
+    def as_dict(self) -> dict:
+        return {
+            "kind": self.kind, "alpha_deg": self.alpha_deg, "q": self.q, "tip_deg": self.tip_deg,
+            "dF_dalpha_sign": int(np.sign(self.dF_dalpha)),
+            "d2F_dq2_sign": int(np.sign(self.d2F_dq2)),
+            "dF_dalpha": self.dF_dalpha, "d2F_dq2": self.d2F_dq2,
+            "normal_form_c": self.normal_form_c, "tip_parabola_c": self.tip_parabola_c,
+            "opens": self.opens, "hessian_smallest_eigenvalues": list(self.hessian_smallest),
+            "converged": self.converged, "residual_norm": self.residual_norm,
+            "iterations": self.iterations,
+        }
+
+
+@jax.jit
+def _fold_report(x, alpha, phi, scene: DipoleMagnet, disc: PlanarDiscretisation):
+    args = (scene, disc)
+    d_alpha, d_qq, phi_q = fold_coefficients(alpha_energy, x, alpha, phi, args, disc.mean)
+    c = -d_qq / (2.0 * d_alpha)
+    X = tip_position(x, disc)
+    V = jax.jvp(lambda th: tip_position(th, disc), (x,), (phi_q,))[1]
+    T = (X[1] * V[0] - X[0] * V[1]) / jnp.dot(X, X)
+    eigs = jnp.linalg.eigvalsh(jax.hessian(alpha_energy)(x, alpha, args))
+    return (d_alpha, d_qq, c, c / T**2, disc.mean(x), tip_angle(x, disc), eigs[:2], phi_q)
+
+
+def _refine_one(theta0, alpha0, scene, disc, tol):
+    args = (scene, disc)
+    _, V = jnp.linalg.eigh(jax.hessian(alpha_energy)(theta0, alpha0, args))
+    fp = moore_spence_solve(alpha_energy, theta0, alpha0, V[:, 0], args, tol)
+    return fp, _fold_report(fp.x, fp.lam, fp.null_vector, scene, disc)
+
+
+@jax.jit
+def _refine_batch(theta0, alpha0, scene, disc, tol):
+    return jax.vmap(_refine_one, in_axes=(0, 0, None, None, None))(theta0, alpha0, scene, disc,
+                                                                    tol)
+
+
+def refine_folds(scene: DipoleMagnet, disc: PlanarDiscretisation, theta0, alpha0,
+                 tol: float = 1e-13) -> list[Fold]:
+    """Moore-Spence from approximate folds (rows of theta0, alpha0), all in one vmapped call.
+
+    The null-vector guess is the lowest eigenvector of the Hessian at each start.
+    """
+    theta0 = jnp.atleast_2d(jnp.asarray(theta0, jnp.float64))
+    alpha0 = jnp.atleast_1d(jnp.asarray(alpha0, jnp.float64))
+    fp, rep = _refine_batch(theta0, alpha0, scene, disc, tol)
+    folds = []
+    for i in range(alpha0.shape[0]):
+        d_alpha, d_qq, c, c_tip, q, tip, eigs, phi_q = (np.asarray(v[i]) for v in rep)
+        folds.append(Fold(
+            kind="", alpha_deg=math.degrees(float(fp.lam[i])), q=float(q),
+            tip_deg=math.degrees(float(tip)), dF_dalpha=float(d_alpha), d2F_dq2=float(d_qq),
+            normal_form_c=float(c), tip_parabola_c=float(c_tip),
+            opens="increasing alpha" if float(c) > 0 else "decreasing alpha",
+            hessian_smallest=(float(eigs[0]), float(eigs[1])), null_vector=phi_q,
+            theta=np.asarray(fp.x[i]), converged=bool(fp.newton.converged[i]),
+            residual_norm=float(fp.newton.residual_norm[i]),
+            iterations=int(fp.newton.iterations[i])))
+    return folds
+
+
+@dataclasses.dataclass(frozen=True)
+class FoldReport:
+    """Folds with alpha > 0 (lower first), the hysteresis width, and the diagram."""
+
+    folds: list[Fold]
+    branch: Branch
+    n: int
+
+    @property
+    def converged(self) -> bool:
+        return self.branch.complete and all(f.converged for f in self.folds)
+
+    @property
+    def hysteresis_width_deg(self) -> float | None:
+        kinds = {f.kind: f for f in self.folds}
+        if "lower" in kinds and "upper" in kinds:
+            return kinds["upper"].alpha_deg - kinds["lower"].alpha_deg
+        return None
+
+    def as_dict(self) -> dict:
+        return {"folds": [f.as_dict() for f in self.folds],
+                "hysteresis_width_deg": self.hysteresis_width_deg,
+                "converged": self.converged, "n": self.n,
+                "branch_status": list(self.branch.status)}
+
+
+def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None = None,
+                 tol: float = 1e-13) -> FoldReport:
+    """Detect the folds on the diagram and refine those with alpha > 0.
+
+    The two folds with alpha > 0 are named by their angle: ``upper`` (the engaged branch
+    turns back; release in a sweep of increasing alpha) and ``lower`` (the disengaged
+    branch turns back; capture). Folds at alpha < 0 are their mirror images. With no
+    fold (no bistability) the list is empty.
+    """
+    disc = planar_discretisation(n, "clamped")
+    branch = branch or trace_diagram(scene, n)
+    starts = []
+    for i in branch.fold_indices:
+        j = i if abs(branch.tangent_alpha[i]) < abs(branch.tangent_alpha[i + 1]) else i + 1
+        if branch.alpha[j] > 0.0:
+            starts.append(j)
+    folds = refine_folds(scene, disc, branch.theta[starts], branch.alpha[starts], tol) \
+        if starts else []
+    folds.sort(key=lambda f: f.alpha_deg)
+    if len(folds) == 2:
+        folds = [dataclasses.replace(folds[0], kind="lower"),
+                 dataclasses.replace(folds[1], kind="upper")]
+    else:
+        folds = [dataclasses.replace(f, kind="fold") for f in folds]
+    return FoldReport(folds=folds, branch=branch, n=n)
+
+
+# --- quasi-static hysteresis -----------------------------------------------------------------
+
+
+class SweepResult(dict):
+    """alpha_deg, tip_deg, q, snapped (bool per step), direction, newton_converged."""
+
+
+def _follow_step(carry, alpha, scene, disc):
+    theta_prev = carry
+    args = (scene, disc)
+    res = newton(lambda th, a: jax.grad(alpha_energy)(th, alpha, a), theta_prev, args, tol=1e-12)
+    H = jax.hessian(alpha_energy)(res.x, alpha, args)
+    stable = jnp.linalg.eigvalsh(H)[0] > 0.0
+    close = jnp.sqrt(jnp.mean((res.x - theta_prev) ** 2)) < 0.1
+    followed = res.converged & stable & close
+
+    def snap(_):
+        d = descend(lambda th, a: alpha_energy(th, alpha, a), theta_prev, args)
+        return d.x, d.converged
+
+    theta, ok = jax.lax.cond(followed, lambda _: (res.x, res.converged), snap, None)
+    return theta, (theta, ~followed, ok)
+
+
+@jax.jit
+def _sweep(theta0, alphas, scene, disc):
+    return jax.lax.scan(lambda c, a: _follow_step(c, a, scene, disc), theta0, alphas)
+
+
+def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: float = 50.0,
+                     step_deg: float = 0.25) -> dict:
+    """The experiment's protocol: alpha from -alpha_max to +alpha_max (clockwise), then back.
+
+    At each magnet position the previous state is continued by Newton; when it no longer
+    exists as a nearby stable equilibrium (a fold was passed) the rod snaps: the energy is
+    descended from the last state to the other stable branch. Returns both sweeps, the snap
+    angles on the grid (the first grid angle past a fold) and whether every step converged.
+    """
+    if not (0.0 < step_deg <= 5.0):
+        raise ParameterError(f"step_deg must lie in (0, 5], got {step_deg!r}")
+    disc = planar_discretisation(n, "clamped")
+    up = np.arange(-alpha_max_deg, alpha_max_deg + 0.5 * step_deg, step_deg)
+    alphas = np.radians(np.concatenate([up, up[::-1][1:]]))
+    start = descend(lambda th, a: alpha_energy(th, alphas[0], a), jnp.zeros(disc.size),
+                    (scene, disc))
+    _, (thetas, snapped, ok) = _sweep(start.x, jnp.asarray(alphas), scene, disc)
+    q, tip, _ = _observables(thetas, jnp.asarray(alphas), scene, disc)
+    snapped = np.asarray(snapped)
+    direction = np.where(np.arange(alphas.size) < up.size, "cw", "ccw")
+    snaps = [{"direction": str(direction[i]), "alpha_deg": float(np.degrees(alphas[i])),
+              "tip_before_deg": float(np.degrees(tip[i - 1])),
+              "tip_after_deg": float(np.degrees(tip[i]))}
+             for i in np.nonzero(snapped)[0]]
+    return {"alpha_deg": np.degrees(alphas), "tip_deg": np.degrees(np.asarray(tip)),
+            "q": np.asarray(q), "snapped": snapped, "direction": direction, "snaps": snaps,
+            "converged": bool(np.all(np.asarray(ok)) and bool(start.converged))}
+
+
+def square_root_law(scene: DipoleMagnet, fold: Fold, n: int = DEFAULT_N,
+                    offsets_deg=np.geomspace(1e-5, 1e-2, 7)) -> dict:
+    """Fit the exponent p in |tip - tip*| ~ |alpha - alpha*|^p on both sides of a fold branch.
+
+    Equilibria at alpha* - sign(c) delta (the side where they exist) are found by Newton
+    from the fold state shifted along the null vector by the normal form,
+    q - q* = +-sqrt(delta / |c|); the exponent is the least-squares slope in log-log.
+    """
+    disc = planar_discretisation(n, "clamped")
+    args = (scene, disc)
+    a_star = math.radians(fold.alpha_deg)
+    out = {}
+    for side, sign in (("stable", 1.0), ("unstable", -1.0)):
+        dtips, ok = [], True
+        for d in np.radians(offsets_deg):
+            alpha = a_star + math.copysign(d, fold.normal_form_c)
+            dq = math.sqrt(d / abs(fold.normal_form_c))
+            guess = jnp.asarray(fold.theta + sign * dq * fold.null_vector)
+            res = newton(lambda th, a, alpha=alpha: jax.grad(alpha_energy)(th, alpha, a), guess,
+                         args, tol=1e-13)
+            ok &= bool(res.converged)
+            dtips.append(abs(float(tip_angle(res.x, disc)) - math.radians(fold.tip_deg)))
+        slope = np.polyfit(np.log(np.radians(offsets_deg)), np.log(dtips), 1)[0]
+        out[side] = {"exponent": float(slope), "converged": ok}
+    return out

@@ -1,0 +1,63 @@
+"""Energy descent to a local minimum: what a rod does when its equilibrium disappears.
+
+At a fold the followed equilibrium ceases to exist and the rod snaps, dynamically, to
+another stable state. Quasi-statically that state is the local minimum reached by descending
+the energy from the last configuration. ``descend`` takes modified Newton steps
+
+    (H + mu I) d = -g,    mu = max(0, shift - lambda_min(H)),
+
+(H the Hessian, so H + mu I is positive definite and d a descent direction) with Armijo
+backtracking on the energy, in one ``lax.while_loop``, until |g| <= tol.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+
+class DescentResult(NamedTuple):
+    x: jax.Array
+    converged: jax.Array
+    gradient_norm: jax.Array
+    iterations: jax.Array
+
+
+def descend(energy: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args: Any = None, *,
+            tol: float = 1e-12, max_steps: int = 500, shift: float = 1e-3) -> DescentResult:
+    """Descend ``energy(x, args)`` from x0 to a point with |grad|_inf <= tol."""
+    grad = jax.grad(energy)
+    hess = jax.hessian(energy)
+
+    def step(state):
+        x, _, k = state
+        g = grad(x, args)
+        H = hess(x, args)
+        lam_min = jnp.linalg.eigvalsh(0.5 * (H + H.T))[0]
+        mu = jnp.maximum(0.0, shift * (1.0 + jnp.abs(lam_min)) - lam_min)
+        d = jnp.linalg.solve(H + mu * jnp.eye(x.shape[0]), -g)
+        e0 = energy(x, args)
+        slope = jnp.dot(g, d)
+
+        def shorter(c):
+            t, _ = c
+            return 0.5 * t, energy(x + 0.5 * t * d, args)
+
+        def bad(c):
+            t, e = c
+            return (~(e <= e0 + 1e-4 * t * slope)) & (t > 1e-12)
+
+        t, _ = jax.lax.while_loop(bad, shorter, (1.0, energy(x + d, args)))
+        x_new = x + t * d
+        return x_new, jnp.max(jnp.abs(grad(x_new, args))), k + 1
+
+    def go_on(state):
+        _, gnorm, k = state
+        return (gnorm > tol) & (k < max_steps) & jnp.isfinite(gnorm)
+
+    g0 = jnp.max(jnp.abs(grad(x0, args)))
+    x, gnorm, k = jax.lax.while_loop(go_on, step, (x0, g0, jnp.asarray(0)))
+    return DescentResult(x, gnorm <= tol, gnorm, k)
