@@ -13,7 +13,15 @@ import os
 import sys
 from pathlib import Path
 
-from jaxrod.params import EXPERIMENTS, NICKEL, ParameterError, Rod, preset
+from jaxrod.params import (
+    EXPERIMENTS,
+    NDFEB_MAGNET,
+    NICKEL,
+    Magnet,
+    ParameterError,
+    Rod,
+    preset,
+)
 
 
 def _enable_compilation_cache() -> None:
@@ -117,21 +125,139 @@ def cmd_greenhill(args) -> int:
     return 0
 
 
-def cmd_reproduce(args) -> int:
-    from jaxrod.reproduce import format_uniform_field_report, uniform_field_report
+def _magnet_scene_from_args(args):
+    """(scene, description dict) from --G/--M/--D or physical inputs."""
+    from jaxrod.analysis.magnet import make_scene
 
-    report = {"uniform_field": uniform_field_report()}
-    text = format_uniform_field_report(report["uniform_field"])
+    physical = any(v is not None for v in (args.preset, args.E, args.length, args.diameter,
+                                            args.magnet_diameter, args.track_radius))
+    if physical:
+        if any(v is not None for v in (args.G, args.M, args.D)):
+            raise ParameterError("G/M/D: give either the groups --G --M --D or physical inputs "
+                                 "(--preset/--E/--length/...), not both")
+        E = args.E if args.E is not None else NICKEL.youngs_modulus
+        rod, _ = preset(args.preset or "permanent-magnet", E)
+        if args.diameter is not None:
+            rod = Rod(rod.material, args.diameter, rod.length)
+        if args.length is not None:
+            rod = rod.with_length(args.length)
+        magnet = Magnet(
+            diameter=args.magnet_diameter or NDFEB_MAGNET.diameter,
+            saturation_magnetisation=NDFEB_MAGNET.saturation_magnetisation,
+            track_radius=args.track_radius or NDFEB_MAGNET.track_radius)
+        G, M, D = rod.G, rod.M(magnet), rod.D(magnet)
+        radius = 0.5 * magnet.diameter / rod.length
+    else:
+        missing = [k for k in ("G", "M", "D") if getattr(args, k) is None]
+        if missing:
+            raise ParameterError(f"{'/'.join(missing)}: give --G, --M and --D (or physical "
+                                 "inputs such as --preset permanent-magnet --E 200e9)")
+        G, M, D, radius = args.G, args.M, args.D, args.magnet_radius
+    scene = make_scene(G, M, D, radius)
+    return scene, {"G": G, "M": M, "D": D}
+
+
+def cmd_folds(args) -> int:
+    from jaxrod.analysis.magnet import locate_folds, reduced_folds_available
+
+    scene, info = _magnet_scene_from_args(args)
+    if args.method == "reduced" and not reduced_folds_available():
+        raise ParameterError("method: the reduced (Lyapunov-Schmidt) route is not available "
+                             "yet; use --method moore-spence")
+    report = locate_folds(scene, n=args.n)
+    out = info | report.as_dict()
+    if not report.folds:
+        out["note"] = "no fold for alpha in (0, 90] degrees: no bistability, no hysteresis"
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.8g}, N = {report.n}")
+    if not report.folds:
+        print(out["note"])
+    for f in report.folds:
+        print(f"{f.kind:6s} fold: alpha* = {f.alpha_deg:.10f} deg  q* = {f.q:.10f}  "
+              f"tip* = {f.tip_deg:.10f} deg  dF/dalpha = {f.dF_dalpha:+.6g}  "
+              f"d2F/dq2 = {f.d2F_dq2:+.6g}  opens toward {f.opens}")
+    if report.hysteresis_width_deg is not None:
+        print(f"hysteresis width = {report.hysteresis_width_deg:.10f} deg")
+    print(f"converged: {report.converged}")
+    return 0 if report.converged else 1
+
+
+def cmd_branch(args) -> int:
+    from jaxrod.analysis.magnet import locate_folds
+    from jaxrod.plotting import diagram_figure
+
+    scene, info = _magnet_scene_from_args(args)
+    report = locate_folds(scene, n=args.n)
+    out_dir = Path(args.out)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    report.branch.write_csv(out_dir / "branch.csv")
+    diagram_figure(report).savefig(out_dir / "branch.png", dpi=120)
+    summary = info | report.as_dict() | {"points": len(report.branch)}
+    (out_dir / "branch.json").write_text(json.dumps(summary, indent=2))
+    print(json.dumps(summary) if args.json else
+          f"{len(report.branch)} branch points, {len(report.folds)} folds with alpha > 0; "
+          f"wrote {out_dir / 'branch.csv'}, branch.png, branch.json")
+    return 0 if report.converged else 1
+
+
+def cmd_sweep(args) -> int:
+    from jaxrod.analysis.magnet import hysteresis_sweep, locate_folds
+    from jaxrod.plotting import hysteresis_figure
+
+    scene, info = _magnet_scene_from_args(args)
+    sweep = hysteresis_sweep(scene, n=args.n, alpha_max_deg=args.alpha_max,
+                             step_deg=args.step)
+    report = locate_folds(scene, n=args.n)
+    out_dir = Path(args.out)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with open(out_dir / "sweep.csv", "w") as fh:
+        fh.write("direction,alpha_deg,tip_deg,q,snapped\n")
+        for i in range(sweep["alpha_deg"].size):
+            fh.write(f"{sweep['direction'][i]},{sweep['alpha_deg'][i]:.10g},"
+                     f"{sweep['tip_deg'][i]:.10g},{sweep['q'][i]:.10g},"
+                     f"{int(sweep['snapped'][i])}\n")
+    hysteresis_figure(sweep, report).savefig(out_dir / "sweep.png", dpi=120)
+    summary = info | {"snaps": sweep["snaps"], "converged": sweep["converged"],
+                      "folds": [f.as_dict() for f in report.folds],
+                      "hysteresis_width_deg": report.hysteresis_width_deg}
+    (out_dir / "sweep.json").write_text(json.dumps(summary, indent=2))
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        for snap in sweep["snaps"]:
+            print(f"{snap['direction']}: snap at alpha = {snap['alpha_deg']:.4f} deg "
+                  f"(tip {snap['tip_before_deg']:.3f} -> {snap['tip_after_deg']:.3f} deg)")
+        print(f"wrote {out_dir / 'sweep.csv'}, sweep.png, sweep.json")
+    return 0 if sweep["converged"] else 1
+
+
+def cmd_reproduce(args) -> int:
+    from jaxrod.reproduce import (
+        format_permanent_magnet_report,
+        format_uniform_field_report,
+        permanent_magnet_report,
+        uniform_field_report,
+    )
+
+    magnet = permanent_magnet_report()
+    sweep = magnet.pop("_sweep_arrays")
+    report = {"uniform_field": uniform_field_report(), "permanent_magnet": magnet}
+    text = (format_uniform_field_report(report["uniform_field"]) + "\n\n"
+            + format_permanent_magnet_report(magnet))
     if args.out is not None:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         (out / "report.md").write_text(text + "\n")
         (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
-        from jaxrod.plotting import stability_diagram_figure
+        from jaxrod.plotting import hysteresis_figure, stability_diagram_figure
 
-        fig = stability_diagram_figure(report["uniform_field"])
-        fig.savefig(out / "stability_diagram.png", dpi=120)
-        text += f"\n\nWrote {out / 'report.md'}, report.json and stability_diagram.png"
+        stability_diagram_figure(report["uniform_field"]).savefig(
+            out / "stability_diagram.png", dpi=120)
+        hysteresis_figure(sweep).savefig(out / "hysteresis_E200.png", dpi=120)
+        text += (f"\n\nWrote {out / 'report.md'}, report.json, stability_diagram.png and "
+                 "hysteresis_E200.png")
     print(json.dumps(report) if args.json else text)
     return 0
 
@@ -161,6 +287,40 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--n", type=int, default=None, help="Chebyshev degree (default: from G)")
     g.add_argument("--json", action="store_true", help="print one JSON object")
     g.set_defaults(func=cmd_greenhill)
+
+    def magnet_inputs(p):
+        p.add_argument("--G", type=_float("G"), help="gravity group (> 0)")
+        p.add_argument("--M", type=_float("M"), help="magnet group (>= 0)")
+        p.add_argument("--D", type=_float("D"), help="track radius / rod length (> 1)")
+        p.add_argument("--magnet-radius", type=_float("magnet radius"), default=None,
+                       help="magnet radius / rod length (refuses D <= 1 + radius)")
+        p.add_argument("--preset", choices=["permanent-magnet"],
+                       help="the paper's nickel wire and NdFeB magnet")
+        p.add_argument("--E", type=_float("E"), help="Young's modulus, Pa (default 200e9)")
+        p.add_argument("--diameter", type=_float("diameter"), help="wire diameter, m")
+        p.add_argument("--length", type=_float("length"), help="rod length, m")
+        p.add_argument("--magnet-diameter", type=_float("magnet diameter"), help="m")
+        p.add_argument("--track-radius", type=_float("track radius"), help="m")
+        p.add_argument("--n", type=int, default=16, help="Chebyshev degree (default 16)")
+        p.add_argument("--json", action="store_true", help="print one JSON object")
+
+    f = sub.add_parser("folds", help="fold (switching) angles of the permanent-magnet scene")
+    magnet_inputs(f)
+    f.add_argument("--method", choices=["moore-spence", "reduced"], default="moore-spence")
+    f.set_defaults(func=cmd_folds)
+
+    b = sub.add_parser("branch", help="whole bifurcation diagram (CSV, PNG, JSON)")
+    magnet_inputs(b)
+    b.add_argument("--out", required=True, help="output directory")
+    b.set_defaults(func=cmd_branch)
+
+    w = sub.add_parser("sweep", help="quasi-static hysteresis sweep (CSV, PNG, JSON)")
+    magnet_inputs(w)
+    w.add_argument("--out", required=True, help="output directory")
+    w.add_argument("--alpha-max", type=_float("alpha-max"), default=50.0,
+                   help="sweep from -alpha_max to +alpha_max and back (deg)")
+    w.add_argument("--step", type=_float("step"), default=0.25, help="magnet step (deg)")
+    w.set_defaults(func=cmd_sweep)
 
     r = sub.add_parser("reproduce", help="recompute the paper's tables and verdicts")
     r.add_argument("--out", default=None, help="directory for report.md, report.json, PNGs")

@@ -55,3 +55,40 @@ def stability_diagram_figure(report: dict | None = None, G_range=(1e-2, 1e3), po
     ax2.legend()
     fig.tight_layout()
     return fig
+
+
+def diagram_figure(report):
+    """Tip angle and q against alpha for a ``FoldReport`` (stable solid, unstable dashed)."""
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.6))
+    for ax, y in ((ax1, "tip"), (ax2, "q")):
+        report.branch.plot(ax, y=y)
+        for f in report.folds:
+            v = f.tip_deg if y == "tip" else f.q
+            for sign in (1, -1):
+                ax.plot(sign * f.alpha_deg, sign * v, "o", mfc="none", mec="k", ms=9)
+        ax.grid(alpha=0.3)
+    ax1.legend(fontsize=8)
+    ax1.set_title("planar equilibria (circles: Moore-Spence folds)")
+    fig.tight_layout()
+    return fig
+
+
+def hysteresis_figure(sweep: dict, report=None):
+    """Tip angle against magnet angle for both sweep directions, folds marked."""
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    for direction, colour, label in (("cw", "C1", "clockwise (alpha increasing)"),
+                                     ("ccw", "C0", "counter-clockwise (alpha decreasing)")):
+        sel = sweep["direction"] == direction
+        ax.plot(sweep["alpha_deg"][sel], sweep["tip_deg"][sel], ".-", color=colour, ms=3,
+                label=label)
+    if report is not None:
+        for f in report.folds:
+            for sign in (1, -1):
+                ax.plot(sign * f.alpha_deg, sign * f.tip_deg, "k*", ms=11)
+        ax.plot([], [], "k*", label="folds (Moore-Spence)")
+    ax.set_xlabel("magnet angle alpha (deg)")
+    ax.set_ylabel("tip angle (deg)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig

@@ -217,3 +217,79 @@ def format_uniform_field_report(rep: dict) -> str:
                    f"{v['predicted_field_on']} / {v['observed_field_on']} | "
                    f"{'yes' if v['agrees'] else 'NO'} |")
     return "\n".join(out)
+
+
+# --- permanent magnet (Corollary "Numerical predictions at the experimental parameters") ----
+
+#: The paper's table: E GPa -> fold -> printed (q0, alpha0 deg, q*, alpha* deg, tip* deg).
+PAPER_FOLDS = {
+    200: {"lower": ("0.142206", "29.85402", "0.143157", "30.12789", "8.20398"),
+          "upper": ("0.539770", "39.73885", "0.528278", "39.30739", "30.35258")},
+    100: {"lower": ("0.173427", "39.45516", "0.178723", "40.95699", "10.24345"),
+          "upper": ("0.919017", "63.23606", "0.872981", "61.50409", "50.41667")},
+}
+#: The paper's hysteresis widths (deg), eq. permanent_physical_threshold_separation.
+PAPER_WIDTHS = {200: "9.1795", 100: "20.5471"}
+#: The paper's table of groups (tab:parameters_radial): E GPa -> (G, M) as printed.
+PAPER_GROUPS = {200: (2.2, 0.0236), 100: (4.4, 0.0472)}
+#: Track radius over rod length of the experiment: 11.25 cm / 9.2 cm.
+EXPERIMENT_D = 11.25 / 9.2
+
+
+def permanent_magnet_report(n: int | None = None) -> dict:
+    """Folds, widths and the hysteresis loop at the experiment's parameters."""
+    from jaxrod.analysis.magnet import DEFAULT_N, hysteresis_sweep, locate_folds, make_scene
+    from jaxrod.params import NDFEB_MAGNET
+
+    n = n or DEFAULT_N
+    cases = []
+    for e_gpa, (G, M) in PAPER_GROUPS.items():
+        rod, _ = preset("permanent-magnet", e_gpa * 1e9)
+        for inputs, (g, m, d) in (("paper's rounded G, M", (G, M, EXPERIMENT_D)),
+                                  ("unrounded from material data",
+                                   (rod.G, rod.M(NDFEB_MAGNET), rod.D(NDFEB_MAGNET)))):
+            report = locate_folds(make_scene(g, m, d, 0.5 * NDFEB_MAGNET.diameter / rod.length),
+                                  n=n)
+            folds = []
+            for f in report.folds:
+                printed = PAPER_FOLDS[e_gpa][f.kind]
+                folds.append(f.as_dict() | {
+                    "paper_q_star": printed[2], "paper_alpha_star_deg": printed[3],
+                    "paper_tip_deg": printed[4],
+                    "alpha_minus_paper_deg": f.alpha_deg - float(printed[3]),
+                    "tip_minus_paper_deg": f.tip_deg - float(printed[4]),
+                    "match": [compare_printed(v, p) for v, p in
+                              zip((f.q, f.alpha_deg, f.tip_deg), printed[2:])],
+                })
+            cases.append({"E_GPa": e_gpa, "inputs": inputs, "G": g, "M": m, "D": d, "n": n,
+                          "folds": folds, "hysteresis_width_deg": report.hysteresis_width_deg,
+                          "paper_width_deg": PAPER_WIDTHS[e_gpa], "converged": report.converged})
+    G, M = PAPER_GROUPS[200]
+    sweep = hysteresis_sweep(make_scene(G, M, EXPERIMENT_D), n=n)
+    return {"cases": cases, "sweep_E200": {"snaps": sweep["snaps"],
+                                           "converged": sweep["converged"]},
+            "_sweep_arrays": sweep}
+
+
+def format_permanent_magnet_report(rep: dict) -> str:
+    out = ["## Permanent magnet on a circle (D = 11.25/9.2)", "",
+           "| E GPa | inputs | fold | alpha* deg | paper | diff deg | q* | paper | tip* deg | "
+           "paper | dF/dalpha | d2F/dq2 | opens |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for c in rep["cases"]:
+        for f in c["folds"]:
+            out.append(
+                f"| {c['E_GPa']} | {c['inputs']} | {f['kind']} | {f['alpha_deg']:.9f} | "
+                f"{f['paper_alpha_star_deg']} | {f['alpha_minus_paper_deg']:+.2e} | "
+                f"{f['q']:.8f} | {f['paper_q_star']} | {f['tip_deg']:.8f} | {f['paper_tip_deg']} | "
+                f"{f['dF_dalpha']:+.5g} | {f['d2F_dq2']:+.5g} | {f['opens']} |")
+    out += ["", "| E GPa | inputs | hysteresis width deg | paper |", "|---|---|---|---|"]
+    for c in rep["cases"]:
+        w = c["hysteresis_width_deg"]
+        out.append(f"| {c['E_GPa']} | {c['inputs']} | "
+                   f"{'none' if w is None else f'{w:.9f}'} | {c['paper_width_deg']} |")
+    out += ["", "Hysteresis sweep (E = 200 GPa, -50 -> 50 -> -50 deg, 0.25 deg steps): snaps at"]
+    for s in rep["sweep_E200"]["snaps"]:
+        out.append(f"- {s['direction']}: alpha = {s['alpha_deg']:.2f} deg, tip "
+                   f"{s['tip_before_deg']:.3f} -> {s['tip_after_deg']:.3f} deg")
+    return "\n".join(out)

@@ -42,6 +42,11 @@ def alpha_energy(theta, alpha, args):
     return scene.with_alpha(alpha).energy(theta, disc)
 
 
+def reduced_folds_available() -> bool:
+    """Whether the Lyapunov-Schmidt reduced route is implemented (see the reduction issue)."""
+    return False
+
+
 def make_scene(G: float, M: float, D: float, magnet_radius: float | None = None) -> DipoleMagnet:
     """Validated scene. ``magnet_radius`` (a/L) refuses magnets the rod could touch."""
     check_groups(G=G, M=M)
@@ -57,7 +62,7 @@ def _observables(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
 
 
 def default_options(max_points: int = 400) -> ContinuationOptions:
-    return ContinuationOptions(ds=0.05, ds_min=1e-8, ds_max=0.25, lam_min=-math.pi / 2,
+    return ContinuationOptions(ds=0.05, ds_min=1e-8, ds_max=0.1, lam_min=-math.pi / 2,
                                lam_max=math.pi / 2, tol=1e-12, max_points=max_points)
 
 
