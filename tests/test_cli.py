@@ -55,7 +55,8 @@ def test_bad_input_exit_2_one_line(argv, name):
 def test_reproduce_writes_report(tmp_path):
     proc = run("reproduce", "--out", str(tmp_path))
     assert proc.returncode == 0, proc.stderr
-    assert "tab:clamped" in proc.stdout and "MISMATCH" not in proc.stdout
+    assert "tab:clamped" in proc.stdout and "MISMATCH" not in proc.stdout.split("## Permanent")[0]
+    assert "Permanent magnet" in proc.stdout and (tmp_path / "hysteresis_E200.png").exists()
     report = json.loads((tmp_path / "report.json").read_text())["uniform_field"]
     assert (tmp_path / "stability_diagram.png").stat().st_size > 10_000
     assert (tmp_path / "report.md").exists()
@@ -65,3 +66,55 @@ def test_reproduce_writes_report(tmp_path):
     assert report["G_crit_match"] == "round"
     assert report["critical_length_match"] == ["round", "round"]
     assert report["L_stab_match"] == "round"
+
+
+MAGNET = ["--G", "2.2", "--M", "0.0236", "--D", str(11.25 / 9.2)]
+
+
+def test_folds_json(capsys):
+    assert main(["folds", *MAGNET, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["converged"] is True
+    assert [f["kind"] for f in out["folds"]] == ["lower", "upper"]
+    for f in out["folds"]:
+        assert {"kind", "alpha_deg", "q", "tip_deg", "dF_dalpha_sign", "d2F_dq2_sign"} <= set(f)
+        assert f["dF_dalpha_sign"] == 1
+    assert [f["d2F_dq2_sign"] for f in out["folds"]] == [-1, 1]
+    assert out["hysteresis_width_deg"] == pytest.approx(
+        out["folds"][1]["alpha_deg"] - out["folds"][0]["alpha_deg"])
+
+
+def test_folds_from_preset_and_no_fold(capsys):
+    assert main(["folds", "--preset", "permanent-magnet", "--E", "100e9", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["G"] == pytest.approx(4.4, abs=1e-4) and len(out["folds"]) == 2
+    assert main(["folds", "--G", "2.2", "--M", "0.002", "--D", "1.22", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["folds"] == [] and out["hysteresis_width_deg"] is None
+
+
+def test_sweep_and_branch_write_files(tmp_path, capsys):
+    assert main(["sweep", *MAGNET, "--step", "1", "--out", str(tmp_path / "s")]) == 0
+    lines = (tmp_path / "s" / "sweep.csv").read_text().splitlines()
+    assert lines[0] == "direction,alpha_deg,tip_deg,q,snapped" and len(lines) == 202
+    assert (tmp_path / "s" / "sweep.png").stat().st_size > 10_000
+    summary = json.loads((tmp_path / "s" / "sweep.json").read_text())
+    assert len(summary["snaps"]) == 4 and summary["converged"]
+    assert main(["branch", *MAGNET, "--out", str(tmp_path / "b")]) == 0
+    assert (tmp_path / "b" / "branch.png").exists() and (tmp_path / "b" / "branch.csv").exists()
+
+
+@pytest.mark.parametrize("argv, name", [
+    (["folds", "--G", "2.2", "--M", "0.02", "--D", "1.0"], "D"),
+    (["folds", "--G", "2.2", "--M", "0.02", "--D", "1.05", "--magnet-radius", "0.1"],
+     "touch"),
+    (["folds", "--G", "2.2", "--D", "1.2"], "M"),
+    (["folds", "--G", "2.2", "--M", "-1", "--D", "1.2"], "M"),
+    (["folds", "--preset", "permanent-magnet", "--length", "0.11"], "tip cannot touch"),
+    (["folds", "--G", "2.2", "--M", "0.02", "--D", "1.2", "--method", "reduced"], "method"),
+])
+def test_magnet_bad_input_exit_2(argv, name):
+    proc = run(*argv)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and name in lines[0], proc.stderr

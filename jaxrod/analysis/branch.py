@@ -95,7 +95,7 @@ def branch_from_runs(runs: list[tuple[RawBranch, bool]], observables) -> Branch:
             fields["tangent_lam"] = -fields["tangent_lam"]
         parts.append(fields)
         status.append(STATUS_MESSAGES[int(raw.status)])
-        complete &= int(raw.status) == 1
+        complete &= int(raw.status) in (1, 4)  # reached the bound, or the folds asked for
     # runs share their starting point: drop the duplicate
     if len(parts) == 2:
         parts[1] = {f: v[1:] for f, v in parts[1].items()}

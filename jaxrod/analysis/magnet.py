@@ -159,6 +159,37 @@ def _refine_batch(theta0, alpha0, scene, disc, tol):
                                                                     tol)
 
 
+@functools.partial(jax.jit, static_argnames="capacity")
+def _fold_pair(scene: DipoleMagnet, disc: PlanarDiscretisation, options: ContinuationOptions,
+               capacity: int, tol):
+    start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc))
+    raw = continuation_run(alpha_energy, start.x, 0.0, (scene, disc), options, capacity, 1.0)
+    t = raw.tangent_lam
+    change = t[:-1] * t[1:] < 0.0
+    i = jnp.nonzero(change, size=2, fill_value=0)[0]
+    j = jnp.where(jnp.abs(t[i]) <= jnp.abs(t[i + 1]), i, i + 1)
+    fp, rep = jax.vmap(_refine_one, in_axes=(0, 0, None, None, None))(
+        raw.x[j], raw.lam[j], scene, disc, tol)
+    return start.converged, raw.status, jnp.sum(change), fp, rep
+
+
+def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13):
+    """Fast path to (alpha_lower, alpha_upper) in degrees, and whether both converged.
+
+    One compiled call: continuation from the straight rod towards alpha > 0 that stops after
+    the second fold, then both Moore-Spence solves (vmapped). Assumes the S-shaped diagram
+    (two folds in (0, 90] degrees); when fewer are found, ``converged`` is False. N = 12
+    reaches the round-off floor at the paper's parameters (use ``locate_folds`` for the full
+    report and diagram).
+    """
+    options = default_options(128)._replace(max_folds=2.0, lam_min=-0.1)
+    ok, status, count, fp, _ = _fold_pair(scene, planar_discretisation(n, "clamped"),
+                                          options._replace(max_points=0), 128, tol)
+    alphas = np.sort(np.degrees(np.asarray(fp.lam)))
+    converged = bool(ok) and int(count) >= 2 and bool(np.all(np.asarray(fp.newton.converged)))
+    return alphas, converged
+
+
 def refine_folds(scene: DipoleMagnet, disc: PlanarDiscretisation, theta0, alpha0,
                  tol: float = 1e-13) -> list[Fold]:
     """Moore-Spence from approximate folds (rows of theta0, alpha0), all in one vmapped call.

@@ -16,7 +16,8 @@ symmetric; its smallest eigenvalue and number of negative eigenvalues (the Morse
 the stability, and a sign change of the parameter component of the tangent marks a fold.
 
 The whole run is one ``lax.while_loop`` over fixed-capacity arrays (NaN padded beyond
-``num_points``): jit-compiled once per (energy function, problem size, capacity).
+``num_points``): jit-compiled once per (energy function, problem size, capacity). A run stops
+at the parameter bounds, after ``max_folds`` folds, when full, or when the step collapses.
 """
 
 from __future__ import annotations
@@ -29,10 +30,11 @@ import jax.numpy as jnp
 
 from jaxrod.solvers.newton import newton
 
-RUNNING, REACHED_BOUND, CAPACITY_FULL, STEP_TOO_SMALL = 0, 1, 2, 3
+RUNNING, REACHED_BOUND, CAPACITY_FULL, STEP_TOO_SMALL, FOLDS_FOUND = 0, 1, 2, 3, 4
 STATUS_MESSAGES = {
     RUNNING: "running",
     REACHED_BOUND: "reached the parameter bound",
+    FOLDS_FOUND: "passed max_folds folds",
     CAPACITY_FULL: "stopped: max_points reached before the parameter bound (raise max_points "
     "or ds_max)",
     STEP_TOO_SMALL: "stopped: the corrector failed even at the minimum step ds_min (a branch "
@@ -52,6 +54,7 @@ class ContinuationOptions(NamedTuple):
     lam_min: float = -jnp.inf
     lam_max: float = jnp.inf
     tol: float = 1e-12
+    max_folds: float = jnp.inf
     max_points: int = 400
 
 
@@ -111,6 +114,7 @@ class _State(NamedTuple):
     ds: jax.Array
     k: jax.Array
     rejected: jax.Array
+    folds: jax.Array
     status: jax.Array
     out: RawBranch
 
@@ -145,8 +149,7 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
         residual_norm=nan, num_points=jnp.asarray(0), status=jnp.asarray(RUNNING),
         rejected_steps=jnp.asarray(0))
 
-    def record(out: RawBranch, k, y, t, iters, res):
-        _, H = _bordered(energy, y, t, args)
+    def record(out: RawBranch, k, y, t, H, iters, res):
         lo, index = _spectrum(H)
         return out._replace(
             x=out.x.at[k].set(y[:-1]), lam=out.lam.at[k].set(y[-1]),
@@ -156,20 +159,21 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
             residual_norm=out.residual_norm.at[k].set(res))
 
     F0 = jnp.max(jnp.abs(_gradient(energy)(x0, lam0, args)))
-    out = record(out, 0, y0, t0, 0, F0)
+    out = record(out, 0, y0, t0, _bordered(energy, y0, t0, args)[1], 0, F0)
 
     def step(s: _State) -> _State:
         y_pred = s.y + s.ds * s.t
         res = newton(_corrector_residual, y_pred, (energy, y_pred, s.t, args), tol=opts.tol)
-        B, _ = _bordered(energy, res.x, s.t, args)
+        B, H = _bordered(energy, res.x, s.t, args)
         t_new = jnp.linalg.solve(B, jnp.zeros_like(s.y).at[-1].set(1.0))
         t_new = t_new / jnp.sqrt(_wdot(t_new, t_new, m))
         turn_ok = _wdot(t_new, s.t, m) > 0.9
         accept = res.converged & turn_ok & jnp.all(jnp.isfinite(t_new))
         k = s.k + jnp.where(accept, 1, 0)
         new_out = jax.lax.cond(
-            accept, lambda o: record(o, k, res.x, t_new, res.iterations, res.residual_norm),
+            accept, lambda o: record(o, k, res.x, t_new, H, res.iterations, res.residual_norm),
             lambda o: o, s.out)
+        folds = s.folds + jnp.where(accept & (t_new[-1] * s.t[-1] < 0), 1, 0)
         ds = jnp.where(accept,
                        jnp.where(res.iterations <= 3, jnp.minimum(s.ds * opts.growth, opts.ds_max),
                                  s.ds),
@@ -178,12 +182,14 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
         t = jnp.where(accept, t_new, s.t)
         lam = y[-1]
         status = jnp.where(accept & ((lam > opts.lam_max) | (lam < opts.lam_min)), REACHED_BOUND,
-                           jnp.where(k >= capacity - 1, CAPACITY_FULL,
-                                     jnp.where(ds < opts.ds_min, STEP_TOO_SMALL, RUNNING)))
-        return _State(y, t, ds, k, s.rejected + jnp.where(accept, 0, 1), status, new_out)
+                           jnp.where(folds >= opts.max_folds, FOLDS_FOUND,
+                                     jnp.where(k >= capacity - 1, CAPACITY_FULL,
+                                               jnp.where(ds < opts.ds_min, STEP_TOO_SMALL,
+                                                         RUNNING))))
+        return _State(y, t, ds, k, s.rejected + jnp.where(accept, 0, 1), folds, status, new_out)
 
     init = _State(y0, t0, jnp.asarray(opts.ds, jnp.float64), jnp.asarray(0), jnp.asarray(0),
-                  jnp.asarray(RUNNING), out)
+                  jnp.asarray(0), jnp.asarray(RUNNING), out)
     final = jax.lax.while_loop(lambda s: s.status == RUNNING, step, init)
     return final.out._replace(num_points=final.k + 1, status=final.status,
                               rejected_steps=final.rejected)
