@@ -167,7 +167,8 @@ def cmd_folds(args) -> int:
     report = locate_folds(scene, n=args.n)
     out = info | report.as_dict()
     if not report.folds:
-        out["note"] = "no fold for alpha in (0, 90] degrees: no bistability, no hysteresis"
+        out["note"] = ("no fold on the branch through the straight rod for alpha in (0, 90] "
+                       "degrees: no hysteresis along the experiment's sweep")
     if args.json:
         print(json.dumps(out))
         return 0

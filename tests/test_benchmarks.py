@@ -8,11 +8,29 @@ import pytest
 BENCH = Path(__file__).resolve().parent.parent / "benchmarks"
 
 
-@pytest.mark.parametrize("script", ["greenhill_convergence.py"])
-def test_benchmark_quick_runs(script, tmp_path):
+def run_quick(script, tmp_path):
     proc = subprocess.run([sys.executable, str(BENCH / script), "--quick", "--out",
                            str(tmp_path)], capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]
-    result = json.loads((tmp_path / script.replace(".py", ".json")).read_text())
+    return json.loads((tmp_path / script.replace(".py", ".json")).read_text())
+
+
+def test_greenhill_convergence_quick(tmp_path):
+    result = run_quick("greenhill_convergence.py", tmp_path)
     # spectral convergence: round-off level reached well before N = 48
     assert all(v is not None and v <= 48 for v in result["N_for_1e-10"].values())
+
+
+def test_magnet_performance_quick(tmp_path):
+    result = run_quick("magnet_performance.py", tmp_path)
+    for E in ("200", "100"):
+        assert result["convergence"][E]["N_for_1e-10_deg"] is not None
+        assert result["timings"][E]["fold_pair_error_deg"] < 1e-10
+    assert (tmp_path / "magnet_performance.png").exists()
+
+
+def test_magnet_extreme_quick(tmp_path):
+    result = run_quick("magnet_extreme.py", tmp_path)
+    for row in result["rows"]:
+        assert row["converged"], row
+        assert row["folds"] or "no fold" in row["message"]

@@ -173,7 +173,7 @@ def _fold_pair(scene: DipoleMagnet, disc: PlanarDiscretisation, options: Continu
     return start.converged, raw.status, jnp.sum(change), fp, rep
 
 
-def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13):
+def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-12):
     """Fast path to (alpha_lower, alpha_upper) in degrees, and whether both converged.
 
     One compiled call: continuation from the straight rod towards alpha > 0 that stops after
@@ -191,7 +191,7 @@ def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13):
 
 
 def refine_folds(scene: DipoleMagnet, disc: PlanarDiscretisation, theta0, alpha0,
-                 tol: float = 1e-13) -> list[Fold]:
+                 tol: float = 1e-12) -> list[Fold]:
     """Moore-Spence from approximate folds (rows of theta0, alpha0), all in one vmapped call.
 
     The null-vector guess is the lowest eigenvector of the Hessian at each start.
@@ -221,10 +221,12 @@ class FoldReport:
     folds: list[Fold]
     branch: Branch
     n: int
+    problems: tuple[str, ...] = ()
 
     @property
     def converged(self) -> bool:
-        return self.branch.complete and all(f.converged for f in self.folds)
+        return self.branch.complete and all(f.converged for f in self.folds) \
+            and not self.problems
 
     @property
     def hysteresis_width_deg(self) -> float | None:
@@ -237,11 +239,11 @@ class FoldReport:
         return {"folds": [f.as_dict() for f in self.folds],
                 "hysteresis_width_deg": self.hysteresis_width_deg,
                 "converged": self.converged, "n": self.n,
-                "branch_status": list(self.branch.status)}
+                "branch_status": list(self.branch.status), "problems": list(self.problems)}
 
 
 def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None = None,
-                 tol: float = 1e-13) -> FoldReport:
+                 tol: float = 1e-12) -> FoldReport:
     """Detect the folds on the diagram and refine those with alpha > 0.
 
     The two folds with alpha > 0 are named by their angle: ``upper`` (the engaged branch
@@ -250,7 +252,24 @@ def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None 
     fold (no bistability) the list is empty.
     """
     disc = planar_discretisation(n, "clamped")
+    given = branch is not None
     branch = branch or trace_diagram(scene, n)
+    report = _folds_on(scene, disc, branch, n, tol)
+    options = default_options()
+    for _ in range(2):  # near the cusp the two folds can fall within one step: refine it
+        if given or not report.problems:
+            break
+        options = options._replace(ds_max=0.2 * options.ds_max, max_points=2 * options.max_points)
+        report = _folds_on(scene, disc, trace_diagram(scene, n, options), n, tol)
+    return report
+
+
+#: A branch whose smallest Hessian eigenvalue dips below this with no fold detected is
+#: re-traced with a finer step (two folds near a cusp can hide inside one step).
+NEAR_SINGULAR = 1e-2
+
+
+def _folds_on(scene, disc, branch: Branch, n: int, tol) -> FoldReport:
     starts = []
     for i in branch.fold_indices:
         j = i if abs(branch.tangent_alpha[i]) < abs(branch.tangent_alpha[i + 1]) else i + 1
@@ -259,12 +278,21 @@ def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None 
     folds = refine_folds(scene, disc, branch.theta[starts], branch.alpha[starts], tol) \
         if starts else []
     folds.sort(key=lambda f: f.alpha_deg)
+    problems = []
     if len(folds) == 2:
         folds = [dataclasses.replace(folds[0], kind="lower"),
                  dataclasses.replace(folds[1], kind="upper")]
+        if abs(folds[1].alpha_deg - folds[0].alpha_deg) < 1e-7:
+            problems.append("both fold starts converged to the same fold: the parameters are "
+                            "near the cusp where the folds merge; the continuation step is "
+                            "too coarse to separate them")
     else:
         folds = [dataclasses.replace(f, kind="fold") for f in folds]
-    return FoldReport(folds=folds, branch=branch, n=n)
+    if not folds and np.nanmin(np.abs(branch.min_eig)) < NEAR_SINGULAR:
+        problems.append(f"no fold detected, but the Hessian's smallest eigenvalue comes within "
+                        f"{NEAR_SINGULAR:g} of zero: two folds may hide within one continuation "
+                        "step (parameters near the cusp)")
+    return FoldReport(folds=folds, branch=branch, n=n, problems=tuple(problems))
 
 
 # --- quasi-static hysteresis -----------------------------------------------------------------
