@@ -190,7 +190,8 @@ def compare(cases: dict, D: float, convergence: dict, timings: dict, quick: bool
         })
     lines = ["AUTO-07p (error against shooting; run = AUTO's run inside its Python driver, "
              "warm; process = a whole `python run.py` AUTO session):", "",
-             "| E GPa | NTST | NCOL | error deg | run ms | process ms |", "|---|---|---|---|---|---|"]
+             "| E GPa | NTST | NCOL | error deg | run ms | process ms |",
+             "|---|---|---|---|---|---|"]
     for r in rows:
         if "error_deg" in r:
             lines.append(f"| {r['E']} | {r['ntst']} | {r['ncol']} | {r['error_deg']:.1e} | "

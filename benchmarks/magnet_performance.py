@@ -36,9 +36,9 @@ sys.path.insert(0, str(HERE))
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
+import shooting_reference as shooting  # noqa: E402
 
 import jaxrod  # noqa: E402,F401
-import shooting_reference as shooting  # noqa: E402
 from jaxrod import spectral  # noqa: E402
 from jaxrod.analysis import magnet  # noqa: E402
 from jaxrod.discretise.planar import planar_discretisation  # noqa: E402

@@ -4,8 +4,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-
 import shooting_reference as shooting
+
 from jaxrod import spectral
 from jaxrod.analysis import magnet
 from jaxrod.discretise.planar import planar_discretisation

@@ -1,4 +1,4 @@
 """Scenes: the energy terms each physical set-up needs, and nothing else."""
 
-from jaxrod.scenes.uniform import UniformField as UniformField
 from jaxrod.scenes.dipole import DipoleMagnet as DipoleMagnet
+from jaxrod.scenes.uniform import UniformField as UniformField
