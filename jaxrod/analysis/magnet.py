@@ -173,7 +173,7 @@ def _fold_pair(scene: DipoleMagnet, disc: PlanarDiscretisation, options: Continu
     return start.converged, raw.status, jnp.sum(change), fp, rep
 
 
-def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-12):
+def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13):
     """Fast path to (alpha_lower, alpha_upper) in degrees, and whether both converged.
 
     One compiled call: continuation from the straight rod towards alpha > 0 that stops after
@@ -191,7 +191,7 @@ def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-12):
 
 
 def refine_folds(scene: DipoleMagnet, disc: PlanarDiscretisation, theta0, alpha0,
-                 tol: float = 1e-12) -> list[Fold]:
+                 tol: float = 1e-13) -> list[Fold]:
     """Moore-Spence from approximate folds (rows of theta0, alpha0), all in one vmapped call.
 
     The null-vector guess is the lowest eigenvector of the Hessian at each start.
@@ -243,7 +243,7 @@ class FoldReport:
 
 
 def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None = None,
-                 tol: float = 1e-12) -> FoldReport:
+                 tol: float = 1e-13) -> FoldReport:
     """Detect the folds on the diagram and refine those with alpha > 0.
 
     The two folds with alpha > 0 are named by their angle: ``upper`` (the engaged branch

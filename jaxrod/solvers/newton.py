@@ -6,6 +6,8 @@ until ||F(x_{k+1})|| < (1 - t/4) ||F(x_k)|| (Armijo on the residual norm). It st
 
     ||F(x_k)||_inf <= tol                                  (converged), or
     a full step had ||dx||_inf <= xtol (1 + ||x||_inf)     (converged: quadratic phase), or
+    no step length reduces ||F|| and ||dx||_inf <= stall_xtol (1 + ||x||_inf)
+                                                           (converged: round-off floor), or
     status becomes MAX_STEPS, NONFINITE or LINE_SEARCH_FAILED.
 
 The result always carries ``converged``, the final ``residual_norm``, the number of
@@ -61,8 +63,8 @@ def _norm(v):
 
 
 def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args: Any = None, *,
-           tol: float = 1e-12, xtol: float = 1e-12, max_steps: int = 50,
-           max_halvings: int = 12) -> NewtonResult:
+           tol: float = 1e-12, xtol: float = 1e-10, max_steps: int = 50,
+           max_halvings: int = 12, stall_xtol: float = 1e-7) -> NewtonResult:
     """Solve ``residual(x, args) = 0`` from ``x0`` (square system, x a 1-D array).
 
     Args:
@@ -70,8 +72,11 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
       x0: initial guess.
       args: PyTree of parameters passed through unchanged.
       tol: absolute tolerance on the max-norm of the residual.
-      xtol: relative tolerance on the max-norm of a full Newton step.
+      xtol: relative tolerance on the max-norm of a full Newton step; the step is applied,
+        so near a regular root (quadratic convergence) the result is accurate to ~xtol^2.
       max_steps, max_halvings: static iteration budgets.
+      stall_xtol: a step this small (relative) that cannot reduce |F| means |F| is at its
+        round-off floor: accepted as converged.
     """
     x0 = jnp.asarray(x0, dtype=jnp.float64)
     f = lambda x: residual(x, args)
@@ -100,7 +105,11 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         # residual did not decrease (it is at its floor).
         x_new = jnp.where(accepted | small_step, x1, state.x)
         fn_new = jnp.where(accepted | small_step, fn1, state.fnorm)
-        converged = (fn_new <= tol) | small_step
+        # No step length reduces |F| although the Newton step is tiny: the residual sits at
+        # its round-off floor (|F| cannot be evaluated more accurately), so x is as accurate
+        # as the arithmetic allows.
+        at_floor = ~accepted & (_norm(dx) <= stall_xtol * (1.0 + _norm(state.x)))
+        converged = (fn_new <= tol) | small_step | at_floor
         status = jnp.where(~finite, NONFINITE,
                            jnp.where(converged, CONVERGED,
                                      jnp.where(accepted, MAX_STEPS, LINE_SEARCH_FAILED)))
