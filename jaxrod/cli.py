@@ -234,19 +234,64 @@ def cmd_sweep(args) -> int:
     return 0 if sweep["converged"] else 1
 
 
+def cmd_fit(args) -> int:
+    from jaxrod.analysis.fit import ANGLE_NAMES, FitSetup, fit_youngs_modulus, setup_from_preset
+
+    named = [getattr(args, name) for name in ANGLE_NAMES]
+    if args.angles is not None:
+        if any(v is not None for v in named):
+            raise ParameterError("angles: give --angles or the named angles, not both")
+        measured = args.angles
+    else:
+        if all(v is None for v in named):
+            raise ParameterError("angles: give --angles CW_CAPTURE CW_RELEASE CCW_CAPTURE "
+                                 "CCW_RELEASE, or some of --cw-capture/--cw-release/"
+                                 "--ccw-capture/--ccw-release")
+        measured = [math.nan if v is None else v for v in named]
+    if len(measured) != 4:
+        raise ParameterError(f"angles: --angles takes 4 values ({', '.join(ANGLE_NAMES)}), "
+                             f"got {len(measured)}")
+    if any(math.isnan(v) for v in (args.angles or [])):
+        raise ParameterError("angles: NaN is not an angle (leave a missing angle out by using "
+                             "the named options)")
+    setup = setup_from_preset(args.preset)
+    if args.D is not None:
+        setup = FitSetup(setup.G_ref, setup.M_ref, args.D, setup.E_ref)
+    result = fit_youngs_modulus(measured, args.sigma_deg, args.offset, setup)
+    if args.json:
+        print(json.dumps(dict(result)))
+        return 0 if result["converged"] else 1
+    print(f"E = {result['E_Pa'] / 1e9:.4f} +- {result['E_std_Pa'] / 1e9:.4f} GPa "
+          f"(sigma = {args.sigma_deg} deg per angle)")
+    if args.offset:
+        print(f"offset = {result['offset_deg']:.4f} +- {result['offset_std_deg']:.4f} deg")
+    for name, r in zip(ANGLE_NAMES, result["residuals_deg"]):
+        if r is not None:
+            print(f"  {name:12s} residual {r:+.4f} deg")
+    print(f"converged: {result['converged']} after {result['iterations']} iterations"
+          + (f" ({result['reason']})" if result["reason"] else ""))
+    if result["warning"]:
+        print(f"warning: {result['warning']}")
+    return 0 if result["converged"] else 1
+
+
 def cmd_reproduce(args) -> int:
     from jaxrod.reproduce import (
         format_permanent_magnet_report,
         format_uniform_field_report,
+        format_youngs_modulus_report,
         permanent_magnet_report,
         uniform_field_report,
+        youngs_modulus_report,
     )
 
     magnet = permanent_magnet_report()
     sweep = magnet.pop("_sweep_arrays")
-    report = {"uniform_field": uniform_field_report(), "permanent_magnet": magnet}
+    report = {"uniform_field": uniform_field_report(), "permanent_magnet": magnet,
+              "youngs_modulus_fit": youngs_modulus_report()}
     text = (format_uniform_field_report(report["uniform_field"]) + "\n\n"
-            + format_permanent_magnet_report(magnet))
+            + format_permanent_magnet_report(magnet) + "\n\n"
+            + format_youngs_modulus_report(report["youngs_modulus_fit"]))
     if args.out is not None:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
@@ -322,6 +367,24 @@ def build_parser() -> argparse.ArgumentParser:
                    help="sweep from -alpha_max to +alpha_max and back (deg)")
     w.add_argument("--step", type=_float("step"), default=0.25, help="magnet step (deg)")
     w.set_defaults(func=cmd_sweep)
+
+    ft = sub.add_parser("fit", help="Young's modulus from measured switching angles",
+                        description="Angles in degrees, sign of the magnet angle (positive "
+                        "towards e1), in the order of the protocol: capture and release of the "
+                        "clockwise sweep (alpha increasing), then capture and release of the "
+                        "counter-clockwise sweep.")
+    ft.add_argument("--preset", choices=["permanent-magnet"], default="permanent-magnet")
+    ft.add_argument("--angles", type=_float("angles"), nargs="+",
+                    help="CW_CAPTURE CW_RELEASE CCW_CAPTURE CCW_RELEASE (deg)")
+    for name in ("cw_capture", "cw_release", "ccw_capture", "ccw_release"):
+        ft.add_argument("--" + name.replace("_", "-"), dest=name, type=_float(name),
+                        default=None, help="one measured angle (deg); omit the others")
+    ft.add_argument("--sigma-deg", type=_float("sigma-deg"), default=1.0,
+                    help="measurement error per angle (deg)")
+    ft.add_argument("--offset", action="store_true", help="fit an offset of the angle scale")
+    ft.add_argument("--D", type=_float("D"), default=None, help="override track radius / L")
+    ft.add_argument("--json", action="store_true")
+    ft.set_defaults(func=cmd_fit)
 
     r = sub.add_parser("reproduce", help="recompute the paper's tables and verdicts")
     r.add_argument("--out", default=None, help="directory for report.md, report.json, PNGs")

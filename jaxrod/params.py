@@ -28,6 +28,23 @@ MU0 = 4e-7 * math.pi  # vacuum permeability, T m / A (the SI value before 2019; 
 STANDARD_GRAVITY = 9.81  # m / s^2, the value the paper's tables use
 
 
+def gravity_group(youngs_modulus, density, gravity, diameter, length):
+    """G = 4 rho g L^3 / (E b^2), b = diameter / 2 (pure arithmetic: works on JAX arrays)."""
+    return 16.0 * density * gravity * length**3 / (youngs_modulus * diameter**2)
+
+
+def anisotropy_group(youngs_modulus, anisotropy_constant, diameter, length):
+    """A = 4 K_d L^2 / (E b^2)."""
+    return 16.0 * anisotropy_constant * length**2 / (youngs_modulus * diameter**2)
+
+
+def magnet_group(youngs_modulus, remanent_magnetisation, saturation_magnetisation, diameter,
+                 length, magnet_diameter):
+    """M = 4 mu0 M_r M_s a^3 / (3 E b^2 L), a = magnet_diameter / 2."""
+    return (2.0 * MU0 * remanent_magnetisation * saturation_magnetisation * magnet_diameter**3
+            / (3.0 * youngs_modulus * diameter**2 * length))
+
+
 class ParameterError(ValueError):
     """An input outside its valid range; the message names the parameter and the range."""
 
@@ -132,8 +149,8 @@ class Rod:
     def G(self) -> float:
         """Gravity group 4 rho g L^3 / (E b^2)."""
         m = self.material
-        return 4.0 * m.density * self.gravity * self.length**3 / (
-            m.youngs_modulus * self.radius**2)
+        return gravity_group(m.youngs_modulus, m.density, self.gravity, self.diameter,
+                             self.length)
 
     def A(self, field_on: bool = True) -> float:
         """Anisotropy group 4 K_d L^2 / (E b^2); zero with the field off.
@@ -145,7 +162,8 @@ class Rod:
         if not field_on:
             return 0.0
         m = self.material
-        return 4.0 * m.anisotropy_constant * self.length**2 / (m.youngs_modulus * self.radius**2)
+        return anisotropy_group(m.youngs_modulus, m.anisotropy_constant, self.diameter,
+                                self.length)
 
     @property
     def C(self) -> float:
@@ -159,9 +177,9 @@ class Rod:
     def M(self, magnet: Magnet) -> float:
         """Dipole group 4 mu0 M_r M_s a^3 / (3 E b^2 L), a = magnet radius."""
         m = self.material
-        a = 0.5 * magnet.diameter
-        return (4.0 * MU0 * m.remanent_magnetisation * magnet.saturation_magnetisation * a**3
-                / (3.0 * m.youngs_modulus * self.radius**2 * self.length))
+        return magnet_group(m.youngs_modulus, m.remanent_magnetisation,
+                            magnet.saturation_magnetisation, self.diameter, self.length,
+                            magnet.diameter)
 
     def D(self, magnet: Magnet) -> float:
         """Track radius over rod length; must exceed 1 + a / L so the magnet clears the rod."""

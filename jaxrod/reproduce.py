@@ -293,3 +293,32 @@ def format_permanent_magnet_report(rep: dict) -> str:
         out.append(f"- {s['direction']}: alpha = {s['alpha_deg']:.2f} deg, tip "
                    f"{s['tip_before_deg']:.3f} -> {s['tip_after_deg']:.3f} deg")
     return "\n".join(out)
+
+
+# --- Young's modulus from the measured switching angles ------------------------------------
+
+#: The paper's measured switching angles (deg): CW capture, CW release, CCW capture, release.
+PAPER_MEASURED_ANGLES = (-25.0, 38.0, 24.0, -42.0)
+
+
+def youngs_modulus_report(sigma_deg: float = 1.0) -> dict:
+    """Fits of E to the paper's measured angles, without and with an offset."""
+    from jaxrod.analysis.fit import fit_youngs_modulus
+
+    return {"measured_deg": list(PAPER_MEASURED_ANGLES), "sigma_deg": sigma_deg,
+            "fits": {name: dict(fit_youngs_modulus(PAPER_MEASURED_ANGLES, sigma_deg, off))
+                     for name, off in (("no_offset", False), ("with_offset", True))}}
+
+
+def format_youngs_modulus_report(rep: dict) -> str:
+    out = ["## Young's modulus from the measured switching angles", "",
+           f"Measured (CW capture, CW release, CCW capture, CCW release): "
+           f"{rep['measured_deg']} deg, sigma = {rep['sigma_deg']} deg", "",
+           "| fit | E GPa | std GPa | offset deg | residuals deg | reduced chi^2 | converged |",
+           "|---|---|---|---|---|---|---|"]
+    for name, f in rep["fits"].items():
+        res = ", ".join(f"{r:+.2f}" for r in f["residuals_deg"] if r is not None)
+        out.append(f"| {name} | {f['E_Pa'] / 1e9:.2f} | {f['E_std_Pa'] / 1e9:.2f} | "
+                   f"{f['offset_deg']:+.3f} | {res} | {f['reduced_chi2']:.3g} | "
+                   f"{f['converged']} |")
+    return "\n".join(out)

@@ -27,7 +27,7 @@ from jaxrod.params import ParameterError, check_groups, check_track_clearance
 from jaxrod.scenes.dipole import DipoleMagnet, tip_angle, tip_position
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.descent import descend
-from jaxrod.solvers.folds import fold_coefficients, moore_spence_solve
+from jaxrod.solvers.folds import differentiable_fold, fold_coefficients, moore_spence_solve
 from jaxrod.solvers.newton import newton
 
 #: Default Chebyshev degree. At the paper's parameters the fold angles reach their round-off
@@ -159,35 +159,59 @@ def _refine_batch(theta0, alpha0, scene, disc, tol):
                                                                     tol)
 
 
-@functools.partial(jax.jit, static_argnames="capacity")
-def _fold_pair(scene: DipoleMagnet, disc: PlanarDiscretisation, options: ContinuationOptions,
-               capacity: int, tol):
+def _fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
+    """Approximate folds from a one-sided continuation that stops after the second fold."""
+    options = default_options(0)._replace(max_folds=2.0, lam_min=-0.1)
     start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc))
-    raw = continuation_run(alpha_energy, start.x, 0.0, (scene, disc), options, capacity, 1.0)
+    raw = continuation_run(alpha_energy, start.x, 0.0, (scene, disc), options,
+                           FOLD_PAIR_CAPACITY, 1.0)
     t = raw.tangent_lam
     change = t[:-1] * t[1:] < 0.0
     i = jnp.nonzero(change, size=2, fill_value=0)[0]
     j = jnp.where(jnp.abs(t[i]) <= jnp.abs(t[i + 1]), i, i + 1)
-    fp, rep = jax.vmap(_refine_one, in_axes=(0, 0, None, None, None))(
-        raw.x[j], raw.lam[j], scene, disc, tol)
-    return start.converged, raw.status, jnp.sum(change), fp, rep
+    hess = jax.vmap(jax.hessian(alpha_energy), in_axes=(0, 0, None))(raw.x[j], raw.lam[j],
+                                                                     (scene, disc))
+    phi0 = jax.vmap(lambda H: jnp.linalg.eigh(H)[1][:, 0])(hess)
+    found = start.converged & (jnp.sum(change) >= 2)
+    return raw.x[j], raw.lam[j], phi0, found
+
+
+FOLD_PAIR_CAPACITY = 128
+
+
+def fold_angles(G, M, D, n: int = 12, tol: float = 1e-13):
+    """(alpha_lower, alpha_upper) in radians and a converged flag, differentiable in G, M, D.
+
+    Pure JAX (jit, vmap and grad compose): the fold guesses come from a one-sided
+    continuation (no gradient flows through it) and each fold is the implicitly
+    differentiated solution of its Moore-Spence system (``differentiable_fold``). Assumes
+    the S-shaped diagram; ``converged`` is False when two folds are not found in (0, 90]
+    degrees or a Moore-Spence solve fails. Inputs are not validated here (they may be
+    tracers): validate user input with ``make_scene`` first.
+    """
+    scene = DipoleMagnet(G, M, D, 0.0)
+    disc = planar_discretisation(n, "clamped")
+    x0, lam0, phi0, found = _fold_guesses(jax.lax.stop_gradient(scene), disc)
+    solve = lambda x, l, p: differentiable_fold(alpha_energy, x, l, p, (scene, disc), tol)
+    z, stats = jax.vmap(solve)(x0, lam0, phi0)
+    alphas = jnp.sort(z[:, -1])
+    converged = found & jnp.all(stats[:, 0] == 1.0) & (alphas[1] - alphas[0] > 1e-9)
+    return alphas, converged
+
+
+_fold_angles_jit = jax.jit(fold_angles, static_argnames=("n",))
 
 
 def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13):
     """Fast path to (alpha_lower, alpha_upper) in degrees, and whether both converged.
 
-    One compiled call: continuation from the straight rod towards alpha > 0 that stops after
-    the second fold, then both Moore-Spence solves (vmapped). Assumes the S-shaped diagram
-    (two folds in (0, 90] degrees); when fewer are found, ``converged`` is False. N = 12
-    reaches the round-off floor at the paper's parameters (use ``locate_folds`` for the full
-    report and diagram).
+    One compiled call of ``fold_angles``: continuation from the straight rod towards
+    alpha > 0 that stops after the second fold, then both Moore-Spence solves (vmapped).
+    N = 12 reaches the round-off floor at the paper's parameters (use ``locate_folds`` for
+    the full report and diagram).
     """
-    options = default_options(128)._replace(max_folds=2.0, lam_min=-0.1)
-    ok, status, count, fp, _ = _fold_pair(scene, planar_discretisation(n, "clamped"),
-                                          options._replace(max_points=0), 128, tol)
-    alphas = np.sort(np.degrees(np.asarray(fp.lam)))
-    converged = bool(ok) and int(count) >= 2 and bool(np.all(np.asarray(fp.newton.converged)))
-    return alphas, converged
+    alphas, converged = _fold_angles_jit(scene.G, scene.M, scene.D, n=n, tol=tol)
+    return np.degrees(np.asarray(alphas)), bool(converged)
 
 
 def refine_folds(scene: DipoleMagnet, disc: PlanarDiscretisation, theta0, alpha0,

@@ -74,6 +74,34 @@ def moore_spence_solve(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13)
 moore_spence = jax.jit(moore_spence_solve, static_argnums=0)
 
 
+def differentiable_fold(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13):
+    """(z, stats): the fold z = (x, phi, lam), differentiable in ``args``, and the Newton
+    statistics (converged as 0/1, residual norm, iterations) as a float array.
+
+    Implicit differentiation (``lax.custom_root``): the primal is the Newton solve of the
+    Moore-Spence system R(z; args) = 0 from (x0, phi0, lam0), and the tangent is one dense
+    solve with dR/dz at the solution, dz = -(dR/dz)^-1 (dR/dargs) dargs; Newton's iterations
+    are never differentiated, and the starting point carries no gradient. Under ``vmap``
+    each batch element gets its own solve.
+    """
+    ell = jax.lax.stop_gradient(phi0 / jnp.dot(phi0, phi0))
+    z0 = jax.lax.stop_gradient(jnp.concatenate([x0, phi0, jnp.atleast_1d(lam0)]))
+
+    def residual(z):
+        return _moore_spence_residual(z, (energy, ell, args))
+
+    def solve(f, z_init):
+        res = newton(lambda z, _: f(z), z_init, None, tol=tol)
+        # aux as floats: custom_root's tangent rule cannot carry integer outputs
+        return res.x, jnp.stack([res.converged.astype(z_init.dtype), res.residual_norm,
+                                 res.iterations.astype(z_init.dtype)])
+
+    def tangent_solve(g, y):
+        return jnp.linalg.solve(jax.jacfwd(g)(y), y)
+
+    return jax.lax.custom_root(residual, z0, solve, tangent_solve, has_aux=True)
+
+
 def fold_coefficients(energy: Energy, x, lam, phi, args, mean: Callable[[jax.Array], Any]):
     """(dF/dlam, d2F/dq2, phi normalised by mean(phi) = 1) at a converged fold."""
     phi = phi / mean(phi)

@@ -1,0 +1,203 @@
+"""Young's modulus from measured switching angles (paper, permanent-magnet experiment).
+
+The measured angles, in the order of the experiment's protocol and with the sign of the
+magnet angle alpha (positive towards e1):
+
+    0 cw_capture    clockwise sweep (alpha increasing), the rod snaps onto the magnet
+    1 cw_release    clockwise sweep, the rod lets go
+    2 ccw_capture   counter-clockwise sweep (alpha decreasing), snaps on
+    3 ccw_release   counter-clockwise sweep, lets go
+
+are modelled by the folds of the planar branch (``fold_angles``) and an optional constant
+offset delta of the angular scale (a misaligned track):
+
+    cw_capture = -alpha_lower + delta,    cw_release = alpha_upper + delta,
+    ccw_capture = alpha_lower + delta,    ccw_release = -alpha_upper + delta.
+
+With E the only material unknown, G and M scale as 1/E (``gravity_group``,
+``magnet_group``) and D does not depend on E. The fit minimises
+0.5 sum_i ((model_i - measured_i) / sigma)^2 over p = (log E, delta) with optax's L-BFGS
+(log E keeps E positive); gradients come from implicit differentiation of the Moore-Spence
+systems. The standard deviation of E follows from the Gauss-Newton covariance
+(J^T J)^-1 of the residuals r_i / sigma at the optimum: std(E) = E std(log E).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+from jaxrod.analysis.magnet import fold_angles
+from jaxrod.params import NDFEB_MAGNET, ParameterError, preset
+
+ANGLE_NAMES = ("cw_capture", "cw_release", "ccw_capture", "ccw_release")
+_SIGNS = jnp.array([-1.0, 1.0, 1.0, -1.0])  # fold angle sign per measured angle
+_FOLD = jnp.array([0, 1, 0, 1])  # lower / upper fold per measured angle
+LOG_E_RANGE = (math.log(1e9), math.log(1e13))
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class FitSetup:
+    """G and M at the reference modulus E_ref (both scale as 1/E) and the track ratio D."""
+
+    G_ref: float
+    M_ref: float
+    D: float
+    E_ref: float
+
+
+def setup_from_preset(name: str = "permanent-magnet") -> FitSetup:
+    rod, _ = preset(name)
+    return FitSetup(rod.G, rod.M(NDFEB_MAGNET), rod.D(NDFEB_MAGNET),
+                    rod.material.youngs_modulus)
+
+
+def model_angles(params, setup: FitSetup, n: int = 12):
+    """The four switching angles (degrees) at p = (log E, delta_deg), and a converged flag."""
+    scale = setup.E_ref / jnp.exp(params[0])
+    alphas, converged = fold_angles(setup.G_ref * scale, setup.M_ref * scale, setup.D, n=n)
+    return _SIGNS * jnp.degrees(alphas[_FOLD]) + params[1], converged
+
+
+class FitResult(dict):
+    """E_Pa, E_std_Pa, offset_deg, offset_std_deg, residuals_deg (None where not measured),
+    converged, iterations, reduced_chi2, reason (why not converged), warning (poor fit)."""
+
+
+def _residuals(params, measured, mask, sigma, setup):
+    model, ok = model_angles(params, setup)
+    r = jnp.where(mask, (model - jnp.where(mask, measured, 0.0)) / sigma, 0.0)
+    return r, ok
+
+
+def _fit_core(measured, mask, sigma, fit_offset, setup: FitSetup, log_e0, max_iter: int = 40,
+              gtol: float = 1e-9):
+    offset_free = jnp.asarray(fit_offset, jnp.float64)
+
+    def loss(p):
+        p = p.at[1].multiply(offset_free)
+        r, ok = _residuals(p, measured, mask, sigma, setup)
+        out_of_range = (p[0] < LOG_E_RANGE[0]) | (p[0] > LOG_E_RANGE[1])
+        return jnp.where(ok & ~out_of_range, 0.5 * jnp.sum(r**2), 1e8)
+
+    opt = optax.lbfgs()  # zoom line search (strong Wolfe)
+    value_and_grad = optax.value_and_grad_from_state(loss)
+
+    def step(carry):
+        p, state, k, _ = carry
+        value, grad = value_and_grad(p, state=state)
+        updates, state = opt.update(grad, state, p, value=value, grad=grad, value_fn=loss)
+        p = optax.apply_updates(p, updates)
+        return p, state, k + 1, jnp.max(jnp.abs(grad))
+
+    def go_on(carry):
+        _, _, k, gnorm = carry
+        return (k < max_iter) & (gnorm > gtol)
+
+    p0 = jnp.array([log_e0, 0.0])
+    p, _, k, _ = jax.lax.while_loop(go_on, step, (p0, opt.init(p0), 0, jnp.inf))
+    p = p.at[1].multiply(offset_free)
+    _, grad = jax.value_and_grad(loss)(p)
+    r, ok = _residuals(p, measured, mask, sigma, setup)
+    J = jax.jacfwd(lambda q: _residuals(q, measured, mask, sigma, setup)[0])(p)
+    J = J.at[:, 1].multiply(offset_free)
+    JTJ = J.T @ J + jnp.diag(jnp.array([0.0, 1.0]) * (1.0 - offset_free))
+    cov = jnp.linalg.inv(JTJ)
+    return p, r * sigma, jnp.sqrt(cov[0, 0]), jnp.sqrt(cov[1, 1]) * offset_free, ok, k, \
+        jnp.max(jnp.abs(grad))
+
+
+_fit_jit = jax.jit(_fit_core, static_argnames=("max_iter",))
+_fit_batch_jit = jax.jit(jax.vmap(_fit_core, in_axes=(0, 0, None, None, None, None)))
+
+
+def _parse(measured, sigma_deg):
+    measured = np.asarray(measured, dtype=float).reshape(-1)
+    if measured.size != 4:
+        raise ParameterError(f"angles: give 4 values ({', '.join(ANGLE_NAMES)}), with nan for "
+                             f"a missing one; got {measured.size}")
+    mask = np.isfinite(measured)
+    if mask.sum() == 0:
+        raise ParameterError("angles: at least one measured angle is needed")
+    if not (math.isfinite(sigma_deg) and sigma_deg > 0):
+        raise ParameterError(f"sigma-deg must be a finite number > 0, got {sigma_deg!r}")
+    if np.any(np.abs(measured[mask]) >= 90.0):
+        raise ParameterError("angles: switching angles must lie in (-90, 90) degrees")
+    return measured, mask
+
+
+def fit_youngs_modulus(measured, sigma_deg: float = 1.0, fit_offset: bool = False,
+                       setup: FitSetup | None = None, E0: float = 150e9) -> FitResult:
+    """Fit E (and optionally the offset) to measured switching angles in degrees.
+
+    ``measured`` holds the four angles in ``ANGLE_NAMES`` order; nan marks one that was not
+    measured. With the offset free, at least two angles are needed.
+    """
+    measured, mask = _parse(measured, sigma_deg)
+    if fit_offset and mask.sum() < 2:
+        raise ParameterError("angles: fitting the offset needs at least two angles")
+    setup = setup or setup_from_preset()
+    p, res, std_log_e, std_off, ok, k, gnorm = _fit_jit(
+        jnp.asarray(np.nan_to_num(measured)), jnp.asarray(mask), float(sigma_deg),
+        bool(fit_offset), setup, math.log(E0))
+    return _result(p, res, std_log_e, std_off, ok, k, gnorm, mask, sigma_deg, fit_offset)
+
+
+def fit_batch(measured, sigma_deg: float = 1.0, fit_offset: bool = False,
+              setup: FitSetup | None = None, E0: float = 150e9) -> list[FitResult]:
+    """Many independent fits (rows of ``measured``) in one vmapped, compiled call."""
+    rows = [_parse(m, sigma_deg) for m in np.atleast_2d(measured)]
+    setup = setup or setup_from_preset()
+    m = jnp.asarray(np.nan_to_num(np.stack([r[0] for r in rows])))
+    mask = jnp.asarray(np.stack([r[1] for r in rows]))
+    out = _fit_batch_jit(m, mask, float(sigma_deg), bool(fit_offset), setup, math.log(E0))
+    return [_result(*(v[i] for v in out), np.asarray(mask[i]), sigma_deg, fit_offset)
+            for i in range(m.shape[0])]
+
+
+def _result(p, res, std_log_e, std_off, ok, k, gnorm, mask, sigma_deg, fit_offset) -> FitResult:
+    E = float(np.exp(p[0]))
+    residuals = [float(r) if mk else None for r, mk in zip(np.asarray(res), mask)]
+    used = [r for r in residuals if r is not None]
+    dof = max(len(used) - (2 if fit_offset else 1), 1)
+    chi2 = float(np.sum(np.square(used)) / sigma_deg**2)
+    reasons = []
+    if not bool(ok):
+        reasons.append("the fold model has no two folds at the final E (no hysteresis there)")
+    if float(gnorm) > 1e-6:
+        reasons.append(f"the gradient did not vanish (|grad| = {float(gnorm):.2e}) within "
+                       f"{int(k)} iterations")
+    if not (LOG_E_RANGE[0] < float(p[0]) < LOG_E_RANGE[1]):
+        reasons.append("E left the range 1 GPa - 10 TPa")
+    warning = None
+    if len(used) > dof and chi2 / dof > 9.0:
+        warning = (f"the residuals exceed sigma = {sigma_deg} deg (reduced chi^2 = "
+                   f"{chi2 / dof:.3g}): the measurement error is larger than assumed, or the "
+                   "angles' order or signs are wrong")
+    return FitResult(
+        E_Pa=E, E_std_Pa=E * float(std_log_e), offset_deg=float(p[1]),
+        offset_std_deg=float(std_off), residuals_deg=residuals, converged=not reasons,
+        iterations=int(k), reduced_chi2=chi2 / dof, reason="; ".join(reasons) or None,
+        warning=warning)
+
+
+def loss_profile(measured, E_values, sigma_deg: float = 1.0, fit_offset: bool = False,
+                 setup: FitSetup | None = None):
+    """0.5 chi^2 over a grid of E (offset at its best value for each E when fitted)."""
+    measured, mask = _parse(measured, sigma_deg)
+    setup = setup or setup_from_preset()
+
+    def at(log_e):
+        model, ok = model_angles(jnp.array([log_e, 0.0]), setup)
+        d = jnp.where(mask, jnp.asarray(np.nan_to_num(measured)) - model, 0.0)
+        delta = jnp.where(fit_offset, jnp.sum(d) / jnp.sum(mask), 0.0)
+        r = jnp.where(mask, (d - delta) / sigma_deg, 0.0)
+        return jnp.where(ok, 0.5 * jnp.sum(r**2), jnp.nan)
+
+    return np.asarray(jax.jit(jax.vmap(at))(jnp.log(jnp.asarray(E_values, jnp.float64))))
