@@ -32,3 +32,10 @@ def test_magnet_extreme_quick(tmp_path):
     for row in result["rows"]:
         assert row["converged"], row
         assert row["folds"] or "no fold" in row["message"]
+
+
+def test_fit_performance_quick(tmp_path):
+    # also checks that the vmapped batch and the one-by-one fits agree
+    result = run_quick("fit_performance.py", tmp_path)
+    assert result["converged"] == result["batch_size"]
+    assert result["one_fit_warm_s"] < 5.0

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 
 import jax
 import jax.numpy as jnp
@@ -150,10 +151,29 @@ def fit_youngs_modulus(measured, sigma_deg: float = 1.0, fit_offset: bool = Fals
 
 
 def fit_batch(measured, sigma_deg: float = 1.0, fit_offset: bool = False,
-              setup: FitSetup | None = None, E0: float = 150e9) -> list[FitResult]:
-    """Many independent fits (rows of ``measured``) in one vmapped, compiled call."""
+              setup: FitSetup | None = None, E0: float = 150e9,
+              method: str = "auto", progress: bool = False) -> list[FitResult]:
+    """Many independent fits, one per row of ``measured``.
+
+    ``method="vmap"`` runs them in one vmapped, compiled call (the form that scales on a
+    GPU); ``"loop"`` runs the compiled single fit row by row, which is faster on a CPU, where
+    every nested while loop of a vmapped batch runs until its slowest element is done
+    (benchmarks/fit_performance.py). ``"auto"`` picks vmap on a GPU and loop otherwise.
+    ``progress`` prints a progress line per 5% on stderr (loop only).
+    """
     rows = [_parse(m, sigma_deg) for m in np.atleast_2d(measured)]
     setup = setup or setup_from_preset()
+    if method == "auto":
+        method = "vmap" if jax.default_backend() == "gpu" else "loop"
+    if method not in ("vmap", "loop"):
+        raise ParameterError(f"method must be 'auto', 'vmap' or 'loop', got {method!r}")
+    if method == "loop":
+        out = []
+        for i, (m, _) in enumerate(rows):
+            out.append(fit_youngs_modulus(m, sigma_deg, fit_offset, setup, E0))
+            if progress and (i + 1) % max(1, len(rows) // 20) == 0:
+                print(f"fit_batch: {i + 1}/{len(rows)}", file=sys.stderr, flush=True)
+        return out
     m = jnp.asarray(np.nan_to_num(np.stack([r[0] for r in rows])))
     mask = jnp.asarray(np.stack([r[1] for r in rows]))
     out = _fit_batch_jit(m, mask, float(sigma_deg), bool(fit_offset), setup, math.log(E0))
