@@ -80,6 +80,18 @@ def _alpha_residual(theta, args):
     return jax.grad(alpha_energy)(theta, alpha, (scene, disc))
 
 
+@jax.jit
+def _equilibrium(theta0, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
+    """Newton for the equilibrium at magnet angle alpha from theta0 (compiled once)."""
+    return newton(_alpha_residual, theta0, (alpha, scene, disc), tol=1e-13)
+
+
+@jax.jit
+def _relax(theta0, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
+    """Energy descent to a local minimum at magnet angle alpha (compiled once)."""
+    return descend(lambda th, a: alpha_energy(th, alpha, a), theta0, (scene, disc))
+
+
 def trace_diagram(scene: DipoleMagnet, n: int = DEFAULT_N,
                   options: ContinuationOptions | None = None) -> Branch:
     """The whole planar diagram for alpha in [-90, 90] degrees through the straight rod.
@@ -362,8 +374,7 @@ def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: flo
     disc = planar_discretisation(n, "clamped")
     up = np.arange(-alpha_max_deg, alpha_max_deg + 0.5 * step_deg, step_deg)
     alphas = np.radians(np.concatenate([up, up[::-1][1:]]))
-    start = descend(lambda th, a: alpha_energy(th, alphas[0], a), jnp.zeros(disc.size),
-                    (scene, disc))
+    start = _relax(jnp.zeros(disc.size), alphas[0], scene, disc)
     _, (thetas, snapped, ok) = _sweep(start.x, jnp.asarray(alphas), scene, disc)
     q, tip, _ = _observables(thetas, jnp.asarray(alphas), scene, disc)
     snapped = np.asarray(snapped)
@@ -379,26 +390,29 @@ def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: flo
 
 def square_root_law(scene: DipoleMagnet, fold: Fold, n: int = DEFAULT_N,
                     offsets_deg=np.geomspace(1e-5, 1e-2, 7)) -> dict:
-    """Fit the exponent p in |tip - tip*| ~ |alpha - alpha*|^p on both sides of a fold branch.
+    """Fit the exponent p in |tip - tip*| ~ |alpha - alpha*|^p on both branches at a fold.
+
+    Returns, for the branch with q > q* and the one with q < q*, the fitted exponent, whether
+    all solves converged, and whether that branch is stable.
 
     Equilibria at alpha* - sign(c) delta (the side where they exist) are found by Newton
     from the fold state shifted along the null vector by the normal form,
     q - q* = +-sqrt(delta / |c|); the exponent is the least-squares slope in log-log.
     """
     disc = planar_discretisation(n, "clamped")
-    args = (scene, disc)
     a_star = math.radians(fold.alpha_deg)
     out = {}
-    for side, sign in (("stable", 1.0), ("unstable", -1.0)):
+    for side, sign in (("q > q*", 1.0), ("q < q*", -1.0)):
         dtips, ok = [], True
         for d in np.radians(offsets_deg):
             alpha = a_star + math.copysign(d, fold.normal_form_c)
             dq = math.sqrt(d / abs(fold.normal_form_c))
             guess = jnp.asarray(fold.theta + sign * dq * fold.null_vector)
-            res = newton(lambda th, a, alpha=alpha: jax.grad(alpha_energy)(th, alpha, a), guess,
-                         args, tol=1e-13)
+            res = _equilibrium(guess, alpha, scene, disc)
             ok &= bool(res.converged)
             dtips.append(abs(float(tip_angle(res.x, disc)) - math.radians(fold.tip_deg)))
+        H = jax.hessian(alpha_energy)(res.x, alpha, (scene, disc))
         slope = np.polyfit(np.log(np.radians(offsets_deg)), np.log(dtips), 1)[0]
-        out[side] = {"exponent": float(slope), "converged": ok}
+        out[side] = {"exponent": float(slope), "converged": ok,
+                     "stable": bool(jnp.linalg.eigvalsh(H)[0] > 0.0)}
     return out
