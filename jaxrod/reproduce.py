@@ -152,6 +152,24 @@ def _fmt(x: float, digits: int = 6) -> str:
     return f"{x:.{digits}g}"
 
 
+def _table_rows(rows: list[dict], size: tuple[str, str], column: tuple[str, str, str]):
+    """Markdown rows of tab:clamped or tab:pinned: recomputed, printed, match, exact."""
+    (size_title, size_key), (col_title, col_key, printed_key) = size, column
+    verdict = lambda ok: "stable" if ok else "buckled"
+    out = [f"| E GPa | {size_title} | G | A | {col_title} | printed (G, A, {col_title}) | match "
+           "| exact A_crit | A - A_crit | A2 | pitchfork | field off | field on |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        p = r["printed"]
+        out.append(
+            f"| {r['E_GPa']} | {r[size_key]} | {r['G']:.6f} | {r['A']:.6f} | "
+            f"{r[col_key]:.6f} | {p['G']}, {p['A']}, {p[printed_key]} | "
+            f"{'/'.join(r['match'])} | {_fmt(r['A_crit_exact'], 10)} | "
+            f"{r['margin_exact']:.6f} | {_fmt(r['A2'])} | {r['criticality']} | "
+            f"{verdict(r['stable_field_off'])} | {verdict(r['stable_field_on'])} |")
+    return out
+
+
 def format_uniform_field_report(rep: dict) -> str:
     """Markdown rendering of ``uniform_field_report``."""
     out = ["## Uniform field (Greenhill with anisotropy)", ""]
@@ -163,33 +181,10 @@ def format_uniform_field_report(rep: dict) -> str:
                f"c = G_crit^(1/3) = {rep['clamped_column_constant']:.4f}, not 0.8686 as the "
                "header says)")
     out.append("")
-    out.append("| E GPa | L cm | G | A | A-G+cG^(2/3) | printed (G, A, col) | match | "
-               "exact A_crit | A - A_crit | A2 | pitchfork | field off | field on |")
-    out.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for r in rep["clamped"]:
-        p = r["printed"]
-        out.append(
-            f"| {r['E_GPa']} | {r['L_cm']} | {r['G']:.6f} | {r['A']:.6f} | "
-            f"{r['A_minus_G_plus_c_G23']:.6f} | {p['G']}, {p['A']}, {p['column']} | "
-            f"{'/'.join(r['match'])} | {_fmt(r['A_crit_exact'], 10)} | "
-            f"{r['margin_exact']:.6f} | {_fmt(r['A2'])} | {r['criticality']} | "
-            f"{'stable' if r['stable_field_off'] else 'buckled'} | "
-            f"{'stable' if r['stable_field_on'] else 'buckled'} |")
-    out.append("")
-    out.append("### tab:pinned")
-    out.append("")
-    out.append("| E GPa | d mm | G | A | A-G | printed (G, A, A-G) | match | exact A_crit | "
-               "A - A_crit | A2 | pitchfork | field off | field on |")
-    out.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for r in rep["pinned"]:
-        p = r["printed"]
-        out.append(
-            f"| {r['E_GPa']} | {r['d_mm']} | {r['G']:.6f} | {r['A']:.6f} | "
-            f"{r['A_minus_G']:.6f} | {p['G']}, {p['A']}, {p['A_minus_G']} | "
-            f"{'/'.join(r['match'])} | {_fmt(r['A_crit_exact'], 10)} | "
-            f"{r['margin_exact']:.6f} | {_fmt(r['A2'])} | {r['criticality']} | "
-            f"{'stable' if r['stable_field_off'] else 'buckled'} | "
-            f"{'stable' if r['stable_field_on'] else 'buckled'} |")
+    out += _table_rows(rep["clamped"], ("L cm", "L_cm"),
+                       ("A-G+cG^(2/3)", "A_minus_G_plus_c_G23", "column"))
+    out += ["", "### tab:pinned", ""]
+    out += _table_rows(rep["pinned"], ("d mm", "d_mm"), ("A-G", "A_minus_G", "A_minus_G"))
     out.append("")
     out.append("### Critical lengths (50 um nickel wire)")
     out.append("")
