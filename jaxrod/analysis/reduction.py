@@ -71,3 +71,26 @@ def normalised_mode(G, M, D, disc: PlanarDiscretisation):
     pq, dpq = disc.at_quadrature(psi)
     lam = disc.integrate(dpq**2 + a0 * pq**2)
     return psi, lam, disc.integrate(pq**2)
+
+
+def _alpha_gradient(theta, alpha, scene, disc):
+    from jaxrod.analysis.magnet import alpha_energy
+
+    return jax.grad(alpha_energy)(theta, alpha, (scene, disc))
+
+
+def one_mode_function(q, alpha, psi, scene, disc: PlanarDiscretisation):
+    """F0(q, alpha) = dE[q psi](psi): the reduced function with the correction w dropped."""
+    return jnp.dot(_alpha_gradient(q * psi, alpha, scene, disc), psi)
+
+
+def one_mode_fold(psi, scene, disc: PlanarDiscretisation, q_guess, alpha_guess):
+    """(q0, alpha0) solving F0 = dF0/dq = 0 by Newton from a guess (the paper's initial
+    approximation of a fold)."""
+    from jaxrod.solvers.newton import newton
+
+    def residual(x, _):
+        f = lambda q: one_mode_function(q, x[1], psi, scene, disc)
+        return jnp.stack([f(x[0]), jax.grad(f)(x[0])])
+
+    return newton(residual, jnp.array([q_guess, alpha_guess]), None, tol=1e-14)
