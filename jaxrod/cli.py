@@ -251,9 +251,6 @@ def cmd_fit(args) -> int:
     if len(measured) != 4:
         raise ParameterError(f"angles: --angles takes 4 values ({', '.join(ANGLE_NAMES)}), "
                              f"got {len(measured)}")
-    if any(math.isnan(v) for v in (args.angles or [])):
-        raise ParameterError("angles: NaN is not an angle (leave a missing angle out by using "
-                             "the named options)")
     setup = setup_from_preset(args.preset)
     if args.D is not None:
         setup = FitSetup(setup.G_ref, setup.M_ref, args.D, setup.E_ref)

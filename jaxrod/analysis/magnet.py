@@ -334,10 +334,6 @@ def _folds_on(scene, disc, branch: Branch, n: int, tol) -> FoldReport:
 # --- quasi-static hysteresis -----------------------------------------------------------------
 
 
-class SweepResult(dict):
-    """alpha_deg, tip_deg, q, snapped (bool per step), direction, newton_converged."""
-
-
 def _follow_step(carry, alpha, scene, disc):
     theta_prev = carry
     args = (scene, disc)

@@ -71,8 +71,6 @@ def moore_spence_solve(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13)
     return _solve_fold(energy, x0, lam0, phi0, args, tol)
 
 
-moore_spence = jax.jit(moore_spence_solve, static_argnums=0)
-
 
 def differentiable_fold(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13):
     """(z, stats): the fold z = (x, phi, lam), differentiable in ``args``, and the Newton
