@@ -158,17 +158,15 @@ def _magnet_scene_from_args(args):
 
 
 def cmd_folds(args) -> int:
-    from jaxrod.analysis.magnet import locate_folds, reduced_folds_available
-
     scene, info = _magnet_scene_from_args(args)
-    if args.method == "reduced" and not reduced_folds_available():
-        raise ParameterError("method: the reduced (Lyapunov-Schmidt) route is not available "
-                             "yet; use --method moore-spence")
+    if args.method == "reduced":
+        return _folds_reduced(scene, info, args)
+    from jaxrod.analysis.magnet import locate_folds
+
     report = locate_folds(scene, n=args.n)
     out = info | report.as_dict()
     if not report.folds:
-        out["note"] = ("no fold on the branch through the straight rod for alpha in (0, 90] "
-                       "degrees: no hysteresis along the experiment's sweep")
+        out["note"] = NO_FOLD_NOTE
     if args.json:
         print(json.dumps(out))
         return 0
@@ -183,6 +181,75 @@ def cmd_folds(args) -> int:
         print(f"hysteresis width = {report.hysteresis_width_deg:.10f} deg")
     print(f"converged: {report.converged}")
     return 0 if report.converged else 1
+
+
+NO_FOLD_NOTE = ("no fold on the branch through the straight rod for alpha in (0, 90] degrees: "
+                "no hysteresis along the experiment's sweep")
+
+
+def _folds_reduced(scene, info, args) -> int:
+    from jaxrod.analysis.reduction import check_reducible, reduced_folds
+
+    check_reducible(scene)
+    folds = reduced_folds(scene, n=args.n)
+    converged = bool(folds) and all(f.converged for f in folds)
+    width = folds[1].alpha_deg - folds[0].alpha_deg if len(folds) == 2 else None
+    out = info | {"method": "reduced", "n": args.n, "folds": [f.as_dict() for f in folds],
+                  "hysteresis_width_deg": width, "converged": converged or not folds}
+    if not folds:
+        out["note"] = NO_FOLD_NOTE + " (one-mode diagram)"
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.8g}, N = {args.n}, "
+          "reduced route (F = dF/dq = 0)")
+    if not folds:
+        print(out["note"])
+    for f in folds:
+        print(f"{f.kind:6s} fold: alpha* = {f.alpha_deg:.10f} deg  q* = {f.q:.10f}  "
+              f"tip* = {f.tip_deg:.10f} deg  (one-mode start: alpha0 = {f.alpha0_deg:.5f} deg, "
+              f"q0 = {f.q0:.6f})  dF/dalpha = {f.dF_dalpha:+.6g}  d2F/dq2 = {f.d2F_dq2:+.6g}"
+              + ("" if f.converged else
+                 f"  NOT CONVERGED (residual {f.residual_norm:.2e}, inner w-solve "
+                 f"converged: {f.correction_converged})"))
+    if width is not None:
+        print(f"hysteresis width = {width:.10f} deg")
+    print(f"converged: {out['converged']}")
+    return 0 if out["converged"] else 1
+
+
+def cmd_certify(args) -> int:
+    from jaxrod.analysis.contraction import certify
+
+    scene, info = _magnet_scene_from_args(args)
+    out = info | certify(scene, n=args.n)
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    mark = lambda ok: "holds " if ok else "FAILS "
+    print(f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.8g}, N = {args.n}")
+    print("scene:")
+    for v in out["scene"]:
+        print(f"  {mark(v['holds'])} {v['name']:38s} margin {v['margin']:+.4g}  ({v['detail']})")
+    for f in out["folds"]:
+        c = {k: float("inf") if v is None else v for k, v in f["constants"].items()}
+        print(f"{f['kind']} fold (alpha* = {f['alpha_deg']:.6f} deg, q* = {f['q']:.6f}): "
+              + "  ".join(f"{k} = {c[k]:.4g}" for k in
+                          ("eta", "S", "E", "Delta", "H", "K", "epsilon")))
+        for v in f["hypotheses"]:
+            print(f"  {mark(v['holds'])} {v['name']:38s} margin {v['margin']:+.4g}")
+    if out["branch"] is None:
+        print(out["note"])
+        return 0
+    b = out["branch"]
+    print(f"branch from the straight rod (alpha > 0): {b['points_certified']} of {b['points']} "
+          f"points certified; K max {b['K_max']:.4g}, Delta min {b['Delta_min']:.4g}")
+    if b["first_failure"]:
+        ff = b["first_failure"]
+        print(f"  first failure at alpha = {ff['alpha_deg']:.4f} deg, q = {ff['q']:.4f} "
+              f"(K = {ff['K']:.4g}, Delta = {ff['Delta']:.4g})")
+    print(f"all hypotheses (scene and folds) hold: {out['all_hold']}")
+    return 0
 
 
 def cmd_branch(args) -> int:
@@ -351,6 +418,10 @@ def build_parser() -> argparse.ArgumentParser:
     magnet_inputs(f)
     f.add_argument("--method", choices=["moore-spence", "reduced"], default="moore-spence")
     f.set_defaults(func=cmd_folds)
+
+    c = sub.add_parser("certify", help="hypotheses of the paper's reduction, with margins")
+    magnet_inputs(c)
+    c.set_defaults(func=cmd_certify)
 
     b = sub.add_parser("branch", help="whole bifurcation diagram (CSV, PNG, JSON)")
     magnet_inputs(b)

@@ -111,7 +111,7 @@ def test_sweep_and_branch_write_files(tmp_path, capsys):
     (["folds", "--G", "2.2", "--D", "1.2"], "M"),
     (["folds", "--G", "2.2", "--M", "-1", "--D", "1.2"], "M"),
     (["folds", "--preset", "permanent-magnet", "--length", "0.11"], "tip cannot touch"),
-    (["folds", "--G", "2.2", "--M", "0.02", "--D", "1.2", "--method", "reduced"], "method"),
+    (["folds", "--G", "20", "--M", "0.01", "--D", "1.2", "--method", "reduced"], "2M/delta^3"),
 ])
 def test_magnet_bad_input_exit_2(argv, name):
     proc = run(*argv)

@@ -42,11 +42,6 @@ def alpha_energy(theta, alpha, args):
     return scene.with_alpha(alpha).energy(theta, disc)
 
 
-def reduced_folds_available() -> bool:
-    """Whether the Lyapunov-Schmidt reduced route is implemented (see the reduction issue)."""
-    return False
-
-
 def make_scene(G: float, M: float, D: float, magnet_radius: float | None = None) -> DipoleMagnet:
     """Validated scene. ``magnet_radius`` (a/L) refuses magnets the rod could touch."""
     check_groups(G=G, M=M)
