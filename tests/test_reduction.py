@@ -1,25 +1,37 @@
 import json
 import math
 
+import airy_reference
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+import reduction_reference
 from scipy.integrate import solve_bvp
 from scipy.optimize import brentq
 
 from jaxrod.analysis import magnet
-from jaxrod.analysis.contraction import (contraction_constants, dual_norm, point_hypotheses,
-                                         scene_hypotheses)
-from jaxrod.analysis.reduction import (check_reducible, correction, normalised_mode,
-                                       one_mode_fold, one_mode_function, poincare_mean_zero,
-                                       reduced_energy, reduced_folds, reduced_function, reduction,
-                                       second_variation_checks)
+from jaxrod.analysis.contraction import (
+    contraction_constants,
+    dual_norm,
+    point_hypotheses,
+    scene_hypotheses,
+)
+from jaxrod.analysis.reduction import (
+    check_reducible,
+    correction,
+    normalised_mode,
+    one_mode_fold,
+    one_mode_function,
+    poincare_mean_zero,
+    reduced_energy,
+    reduced_folds,
+    reduced_function,
+    reduction,
+    second_variation_checks,
+)
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import ParameterError
-
-import airy_reference
-import reduction_reference
 
 D_PAPER = 11.25 / 9.2
 CASES = {"E200": (2.2, 0.0236), "E100": (4.4, 0.0472)}

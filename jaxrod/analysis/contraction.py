@@ -51,11 +51,6 @@ def _dense_grid(n: int, support: str):
     return s, spectral.interpolation_matrix(n, s)[:, first:]
 
 
-class Constants(dict):
-    """The constants at one (q, alpha) (a dict of arrays: eta, S, E, Delta, H, K, epsilon,
-    g_norm, separation)."""
-
-
 def dual_norm(rho_quad, disc: PlanarDiscretisation) -> jax.Array:
     """||rho||_{Y*} = sup_{v in Y} int rho v / ||v'||_L2, exactly on the discrete Y."""
     Z = mean_zero_basis(disc)
@@ -92,7 +87,8 @@ def contraction_constants(q, alpha, red: Reduction, scene: DipoleMagnet,
     g_norm = jnp.linalg.norm(g)
     K = (H + 2.0 * (G + M * g_norm) * eta + 6.0 * M / Delta**4 * (E + S**2)) / red.mu_perp
     return {"eta": eta, "S": S, "E": E, "Delta": Delta, "H": H, "K": K,
-            "epsilon": jnp.where(K < 0.5, eta / (1.0 - K), jnp.inf), "g_norm": g_norm, "separation": separation}
+            "epsilon": jnp.where(K < 0.5, eta / (1.0 - K), jnp.inf), "g_norm": g_norm,
+            "separation": separation}
 
 
 @dataclasses.dataclass(frozen=True)
