@@ -93,3 +93,32 @@ def hysteresis_figure(sweep: dict, report=None):
     ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
+
+
+CONDITIONING_LABELS = {
+    "full": "full Newton (Hessian)",
+    "bordered": "pseudo-arclength (bordered)",
+    "moore_spence": "Moore-Spence",
+    "w_problem": "mean-zero correction w",
+    "reduced": "reduced 2x2 (F = dF/dq = 0)",
+}
+
+
+def conditioning_figure(studies: dict):
+    """Condition numbers against distance to the fold, one panel per fold.
+
+    ``studies``: {title: output of ``conditioning_near_fold``}.
+    """
+    cols = min(2, len(studies))
+    rows = -(-len(studies) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(6.2 * cols, 4.6 * rows), squeeze=False)
+    for ax, (title, c) in zip(axes.flat, studies.items()):
+        for key, label in CONDITIONING_LABELS.items():
+            ax.loglog(c["distance_deg"], c[key], "o-", ms=3, label=label)
+        ax.set_xlabel("|alpha - alpha*| (deg)")
+        ax.set_ylabel("2-norm condition number")
+        ax.set_title(title)
+        ax.grid(alpha=0.3, which="both")
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig

@@ -39,3 +39,13 @@ def test_fit_performance_quick(tmp_path):
     result = run_quick("fit_performance.py", tmp_path)
     assert result["converged"] == result["batch_size"]
     assert result["one_fit_warm_s"] < 5.0
+
+
+def test_conditioning_quick(tmp_path):
+    # the paper's claim: the full Newton matrix blows up at the fold, the reduced one does not
+    studies = run_quick("conditioning.py", tmp_path)
+    assert len(studies) == 2
+    for c in studies.values():
+        assert c["full"][0] > 1e3 * c["full"][-1] / 10 and c["full"][0] > 1e6
+        assert max(c["reduced"]) < 100 and max(c["moore_spence"]) < 1e4
+        assert max(c["w_problem"]) / min(c["w_problem"]) < 1.1
