@@ -247,7 +247,8 @@ def cmd_certify(args) -> int:
     if b["first_failure"]:
         ff = b["first_failure"]
         print(f"  first failure at alpha = {ff['alpha_deg']:.4f} deg, q = {ff['q']:.4f} "
-              f"(K = {ff['K']:.4g}, Delta = {ff['Delta']:.4g})")
+              f"(K = {ff['K']:.4g}, Delta = {ff['Delta']:.4g}); last certified point alpha = "
+              f"{ff['last_certified_alpha_deg']:.4f} deg, q = {ff['last_certified_q']:.4f}")
     print(f"all hypotheses (scene and folds) hold: {out['all_hold']}")
     return 0
 

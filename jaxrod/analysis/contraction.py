@@ -125,12 +125,16 @@ def point_hypotheses(constants: dict) -> list[Verdict]:
             Verdict("K < 1/2", K < 0.5, 0.5 - K, f"K = {K:.6g}")]
 
 
+#: Capacity of the fine continuation along which ``certify`` checks the branch (step <= 0.01).
+BRANCH_POINTS = 2000
+
+
 def _finite_or_none(v) -> float | None:
     v = float(v)
     return v if np.isfinite(v) else None
 
 
-_constants_batch = jax.jit(jax.vmap(contraction_constants, in_axes=(0, 0, None, None, None)))
+contraction_constants_batch = jax.jit(jax.vmap(contraction_constants, in_axes=(0, 0, None, None, None)))
 
 
 def certify(scene: DipoleMagnet, n: int = 16) -> dict:
@@ -138,10 +142,11 @@ def certify(scene: DipoleMagnet, n: int = 16) -> dict:
     of the reduced route, and along the branch from the straight rod towards alpha > 0 (the
     first point, in arc length from (q, alpha) = (0, 0), where Delta > 0 or K < 1/2 fails).
 
-    The branch is the full-space continuation (``trace_diagram``), so the check covers the
-    branch even where the contraction argument does not.
+    The branch is the full-space continuation (``trace_diagram`` with steps <= 0.01), so the
+    check covers the branch even where the contraction argument does not; a failure is
+    located between the last certified point and the first failing one.
     """
-    from jaxrod.analysis.magnet import trace_diagram
+    from jaxrod.analysis.magnet import default_options, trace_diagram
     from jaxrod.analysis.reduction import reduced_folds, reduction
 
     disc = planar_discretisation(n, "clamped")
@@ -159,10 +164,10 @@ def certify(scene: DipoleMagnet, n: int = 16) -> dict:
             "alpha0_deg": f.alpha0_deg, "converged": f.converged,
             "constants": {k: _finite_or_none(v) for k, v in c.items()},
             "hypotheses": [v.as_dict() for v in point_hypotheses(c)]})
-    branch = trace_diagram(scene, n)
+    branch = trace_diagram(scene, n, default_options(BRANCH_POINTS)._replace(ds_max=0.01))
     start = int(np.argmin(np.abs(branch.alpha) + np.abs(branch.q)))
     q, alpha = branch.q[start:], branch.alpha[start:]
-    c = {k: np.asarray(v) for k, v in _constants_batch(q, alpha, red, scene, disc).items()}
+    c = {k: np.asarray(v) for k, v in contraction_constants_batch(q, alpha, red, scene, disc).items()}
     ok = (c["Delta"] > 0.0) & (c["K"] < 0.5)
     first_bad = int(np.argmin(ok)) if not ok.all() else None
     out["branch"] = {
@@ -170,7 +175,9 @@ def certify(scene: DipoleMagnet, n: int = 16) -> dict:
         "K_max": float(c["K"].max()), "Delta_min": float(c["Delta"].min()),
         "first_failure": None if first_bad is None else {
             "alpha_deg": float(np.degrees(alpha[first_bad])), "q": float(q[first_bad]),
-            "K": float(c["K"][first_bad]), "Delta": float(c["Delta"][first_bad])},
+            "K": float(c["K"][first_bad]), "Delta": float(c["Delta"][first_bad]),
+            "last_certified_alpha_deg": float(np.degrees(alpha[max(first_bad - 1, 0)])),
+            "last_certified_q": float(q[max(first_bad - 1, 0)])},
         "arrays": {"alpha_deg": np.degrees(alpha).tolist(), "q": q.tolist(),
                    "K": c["K"].tolist(), "Delta": c["Delta"].tolist()}}
     out["all_hold"] = (all(v["holds"] for v in out["scene"])
