@@ -261,9 +261,36 @@ def permanent_magnet_report(n: int | None = None) -> dict:
                           "paper_width_deg": PAPER_WIDTHS[e_gpa], "converged": report.converged})
     G, M = PAPER_GROUPS[200]
     sweep = hysteresis_sweep(make_scene(G, M, EXPERIMENT_D), n=n)
-    return {"cases": cases, "sweep_E200": {"snaps": sweep["snaps"],
-                                           "converged": sweep["converged"]},
+    return {"cases": cases, "reduced_route": reduced_route_report(cases, n),
+            "sweep_E200": {"snaps": sweep["snaps"], "converged": sweep["converged"]},
             "_sweep_arrays": sweep}
+
+
+def reduced_route_report(cases: list[dict], n: int) -> list[dict]:
+    """The Lyapunov-Schmidt route at the paper's rounded (G, M): one-mode and reduced folds
+    against the printed q0, alpha0 and the Moore-Spence folds, and the contraction verdicts."""
+    from jaxrod.analysis.contraction import certify
+    from jaxrod.analysis.magnet import make_scene
+
+    rows = []
+    for c in cases:
+        if c["inputs"] != "paper's rounded G, M":
+            continue
+        cert = certify(make_scene(c["G"], c["M"], c["D"]), n=n)
+        scene_ok = all(v["holds"] for v in cert["scene"])
+        for f, ms in zip(cert["folds"], c["folds"]):
+            printed = PAPER_FOLDS[c["E_GPa"]][f["kind"]]
+            rows.append({
+                "E_GPa": c["E_GPa"], "kind": f["kind"], "q0": f["q0"],
+                "alpha0_deg": f["alpha0_deg"], "paper_q0": printed[0],
+                "paper_alpha0_deg": printed[1],
+                "alpha0_minus_paper_deg": f["alpha0_deg"] - float(printed[1]),
+                "alpha_star_minus_moore_spence_deg": f["alpha_deg"] - ms["alpha_deg"],
+                "q_star_minus_moore_spence": f["q"] - ms["q"],
+                "K": f["constants"]["K"], "Delta": f["constants"]["Delta"],
+                "hypotheses_hold": all(h["holds"] for h in f["hypotheses"]),
+                "scene_hypotheses_hold": scene_ok, "converged": f["converged"]})
+    return rows
 
 
 def format_permanent_magnet_report(rep: dict) -> str:
@@ -283,6 +310,16 @@ def format_permanent_magnet_report(rep: dict) -> str:
         w = c["hysteresis_width_deg"]
         out.append(f"| {c['E_GPa']} | {c['inputs']} | "
                    f"{'none' if w is None else f'{w:.9f}'} | {c['paper_width_deg']} |")
+    out += ["", "Reduced (Lyapunov-Schmidt) route, paper's rounded G, M:", "",
+            "| E GPa | fold | q0 | paper | alpha0 deg | paper | diff deg | alpha* - MS deg | "
+            "K | Delta > 0, K < 1/2 | scene hypotheses |", "|" + "---|" * 11]
+    for r in rep["reduced_route"]:
+        out.append(f"| {r['E_GPa']} | {r['kind']} | {r['q0']:.8f} | {r['paper_q0']} | "
+                   f"{r['alpha0_deg']:.8f} | {r['paper_alpha0_deg']} | "
+                   f"{r['alpha0_minus_paper_deg']:+.2e} | "
+                   f"{r['alpha_star_minus_moore_spence_deg']:+.1e} | {r['K']:.4g} | "
+                   f"{'hold' if r['hypotheses_hold'] else 'FAIL'} | "
+                   f"{'hold' if r['scene_hypotheses_hold'] else 'FAIL'} |")
     out += ["", "Hysteresis sweep (E = 200 GPa, -50 -> 50 -> -50 deg, 0.25 deg steps): snaps at"]
     for s in rep["sweep_E200"]["snaps"]:
         out.append(f"- {s['direction']}: alpha = {s['alpha_deg']:.2f} deg, tip "

@@ -66,6 +66,11 @@ def test_reproduce_writes_report(tmp_path):
     assert report["G_crit_match"] == "round"
     assert report["critical_length_match"] == ["round", "round"]
     assert report["L_stab_match"] == "round"
+    reduced = json.loads((tmp_path / "report.json").read_text())["permanent_magnet"][
+        "reduced_route"]
+    assert len(reduced) == 4 and all(r["converged"] for r in reduced)
+    assert all(abs(r["alpha_star_minus_moore_spence_deg"]) < 1e-10 for r in reduced)
+    assert [r["hypotheses_hold"] for r in reduced] == [True, True, True, False]
 
 
 MAGNET = ["--G", "2.2", "--M", "0.0236", "--D", str(11.25 / 9.2)]

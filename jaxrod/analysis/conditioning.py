@@ -22,7 +22,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.analysis.reduction import (ReducedFold, reduced_function, reduced_state, reduction)
+from jaxrod.analysis.reduction import ReducedFold, reduced_function, reduced_state, reduction
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.scenes.dipole import DipoleMagnet
 from jaxrod.solvers.folds import _moore_spence_residual

@@ -134,7 +134,9 @@ def _finite_or_none(v) -> float | None:
     return v if np.isfinite(v) else None
 
 
-contraction_constants_batch = jax.jit(jax.vmap(contraction_constants, in_axes=(0, 0, None, None, None)))
+#: ``contraction_constants`` over arrays of (q, alpha), compiled.
+contraction_constants_batch = jax.jit(
+    jax.vmap(contraction_constants, in_axes=(0, 0, None, None, None)))
 
 
 def certify(scene: DipoleMagnet, n: int = 16) -> dict:
@@ -167,7 +169,8 @@ def certify(scene: DipoleMagnet, n: int = 16) -> dict:
     branch = trace_diagram(scene, n, default_options(BRANCH_POINTS)._replace(ds_max=0.01))
     start = int(np.argmin(np.abs(branch.alpha) + np.abs(branch.q)))
     q, alpha = branch.q[start:], branch.alpha[start:]
-    c = {k: np.asarray(v) for k, v in contraction_constants_batch(q, alpha, red, scene, disc).items()}
+    c = contraction_constants_batch(q, alpha, red, scene, disc)
+    c = {k: np.asarray(v) for k, v in c.items()}
     ok = (c["Delta"] > 0.0) & (c["K"] < 0.5)
     first_bad = int(np.argmin(ok)) if not ok.all() else None
     out["branch"] = {
