@@ -62,7 +62,7 @@ def mean_functional(disc: PlanarDiscretisation) -> jax.Array:
 
 def stiffness_matrix(disc: PlanarDiscretisation) -> jax.Array:
     """Matrix of int u' v' (the Hessian of the bending energy): the Gram matrix of ||.||_Y."""
-    return jax.hessian(bending_energy)(jnp.zeros(disc.size), disc)
+    return jax.hessian(bending_energy)(jnp.zeros(disc.size, disc.quad_weights.dtype), disc)
 
 
 def mean_zero_basis(disc: PlanarDiscretisation) -> jax.Array:
@@ -101,8 +101,8 @@ def normalised_mode(G, M, D, disc: PlanarDiscretisation):
     m = mean_functional(disc)
     B = b0_matrix(G, M, D, disc)
     n = m.shape[0]
-    kkt = jnp.block([[B, m[:, None]], [m[None, :], jnp.zeros((1, 1))]])
-    psi = jnp.linalg.solve(kkt, jnp.zeros(n + 1).at[-1].set(1.0))[:n]
+    kkt = jnp.block([[B, m[:, None]], [m[None, :], jnp.zeros((1, 1), B.dtype)]])
+    psi = jnp.linalg.solve(kkt, jnp.zeros(n + 1, B.dtype).at[-1].set(1.0))[:n]
     pq, dpq = disc.at_quadrature(psi)
     a0 = 2.0 * M / delta**3 - G * (1.0 - disc.quad_nodes)
     lam = disc.integrate(dpq**2 + a0 * pq**2)

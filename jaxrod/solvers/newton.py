@@ -78,7 +78,9 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
       stall_xtol: a step this small (relative) that cannot reduce |F| means |F| is at its
         round-off floor: accepted as converged.
     """
-    x0 = jnp.asarray(x0, dtype=jnp.float64)
+    x0 = jnp.asarray(x0)
+    if not jnp.issubdtype(x0.dtype, jnp.floating):
+        x0 = x0.astype(jnp.float64)  # float32 input stays float32 (tolerances are the caller's)
     f = lambda x: residual(x, args)
     jac = jax.jacfwd(f)
 
