@@ -27,11 +27,43 @@ def test_magnet_performance_quick(tmp_path):
     assert (tmp_path / "magnet_performance.png").exists()
 
 
-def test_magnet_extreme_quick(tmp_path):
-    result = run_quick("magnet_extreme.py", tmp_path)
+def test_extreme_quick(tmp_path):
+    result = run_quick("extreme.py", tmp_path)
     for row in result["rows"]:
         assert row["converged"], row
         assert row["folds"] or "no fold" in row["message"]
+        if row["folds"] and "max_difference_deg" in row["reduced"]:
+            assert row["reduced"]["max_difference_deg"] < 1e-9, row
+    for g in result["greenhill"]:
+        assert g["N_for_1e-10"] is not None and g["N_for_1e-10"] <= g["default_N"], g
+
+
+def test_error_vs_time_quick(tmp_path):
+    result = run_quick("error_vs_time.py", tmp_path)
+    methods = {r["method"] for r in result["rows"]}
+    assert {"scipy solve_bvp + natural continuation", "paper's sine series + BFGS",
+            "jaxrod reduced route", "jaxrod continuation only"} <= methods
+    for r in result["rows"]:
+        if r["method"] in ("jaxrod Moore-Spence (fold_pair)", "jaxrod reduced route") \
+                and r["setting"] == "N=12":
+            assert r["error_deg"] < 1e-10
+    assert (tmp_path / "error_vs_time.png").exists()
+    assert all(q["ratio"] > 1 for q in result["ratios"])
+
+
+def test_throughput_quick(tmp_path):
+    result = run_quick("throughput.py", tmp_path)
+    for r in result["rows"]:
+        assert r["converged_fraction"] == 1.0
+        if r["dtype"] == "float32":
+            assert r["max_error_vs_float64_deg"] < 1e-2
+    assert result["baseline_fold_angles"]["max_difference_fold_pairs_vs_fold_angles_deg"] < 1e-9
+
+
+def test_compile_time_quick(tmp_path):
+    result = run_quick("compile_time.py", tmp_path)
+    assert all("error" not in r for r in result["rows"])
+    assert result["cli"]["folds_cache_warm_s"] > 0
 
 
 def test_fit_performance_quick(tmp_path):

@@ -15,7 +15,8 @@ The one-mode folds lie within a few degrees of the true folds for the paper's pa
 (within 2 degrees for E in 80-250 GPa, where every batch element converges to the same folds
 as ``fold_angles``). ``converged`` is False where the grid finds fewer than two one-mode
 folds (beyond or very near the cusp where the folds merge), where the two Moore-Spence
-solves land on the same fold, or where a solve fails: use ``locate_folds`` for those.
+solves land on the same fold or outside (0, 90] degrees, or where a solve fails: use
+``locate_folds`` for those.
 """
 
 from __future__ import annotations
@@ -122,7 +123,8 @@ def fold_pair_one(G, M, D, disc: PlanarDiscretisation):
 
     ms = jax.vmap(moore_spence)(one.x)
     alphas = ms.x[:, -1]
-    converged = found & jnp.all(ms.converged) & (alphas[1] - alphas[0] > 1e3 * xtol)
+    in_range = jnp.all((alphas > 0.0) & (alphas <= 0.5 * jnp.pi))
+    converged = found & jnp.all(ms.converged) & in_range & (alphas[1] - alphas[0] > 1e3 * xtol)
     return alphas, converged, jnp.max(ms.iterations)
 
 

@@ -32,7 +32,7 @@ from jaxrod.solvers.newton import newton
 
 #: Default Chebyshev degree. At the paper's parameters the fold angles reach their round-off
 #: floor (~1e-11 degrees) from N = 12 (benchmarks/magnet_convergence.py); 16 keeps a margin.
-#: Small clearances D - 1 need more (benchmarks/magnet_extreme.py).
+#: Small clearances D - 1 need more (benchmarks/extreme.py).
 DEFAULT_N = 16
 
 

@@ -1,0 +1,34 @@
+import numpy as np
+
+from jaxrod.analysis import magnet
+from jaxrod.analysis.batch import fold_pairs
+
+D = 11.25 / 9.2
+
+
+def test_fold_pairs_agree_with_the_continuation_route_and_flag_missing_folds():
+    E = np.array([80.0, 100.0, 150.0, 200.0, 250.0])
+    G, M = 2.2 * 200 / E, 0.0236 * 200 / E
+    # add a magnet too weak for bistability (beyond the cusp) and a clearance where the rod
+    # stays engaged up to 90 degrees: no fold pair, reported as not converged
+    G = np.append(G, [2.2, 2.2])
+    M = np.append(M, [0.002, 0.0236])
+    Ds = np.append(np.full(E.size, D), [D, 1.02])
+    alphas, converged, iterations = fold_pairs(G, M, Ds)
+    converged = np.asarray(converged)
+    assert converged[:E.size].all() and not converged[E.size:].any()
+    for i in range(E.size):
+        ref = magnet.locate_folds(magnet.make_scene(G[i], M[i], D), n=16).folds
+        got = np.degrees(np.asarray(alphas[i]))
+        assert np.max(np.abs(got - [f.alpha_deg for f in ref])) < 1e-10
+    assert int(np.max(np.asarray(iterations)[:E.size])) <= 8
+
+
+def test_fold_pairs_float32_loses_about_four_digits():
+    G, M = np.array([2.2, 4.4]), np.array([0.0236, 0.0472])
+    a64, c64, _ = fold_pairs(G, M, np.full(2, D))
+    a32, c32, _ = fold_pairs(G, M, np.full(2, D), dtype="float32")
+    assert np.asarray(a32).dtype == np.float32
+    assert np.asarray(c32).all() and np.asarray(c64).all()
+    err = np.degrees(np.abs(np.asarray(a32, float) - np.asarray(a64)))
+    assert 1e-7 < err.max() < 1e-2
