@@ -25,7 +25,7 @@ and Proposition "Scalar reduction" turns the planar equilibria into the zeros of
 
 F is the q-derivative of the reduced energy e(q, alpha) = E_alpha(q psi + w(q, alpha))
 (dE[theta](d_q w) = 0 because d_q w lies in Y), so the reduced problem is a one-degree-of-
-freedom energy that the generic continuation traces. The folds solve F = dF/dq = 0, a 2 x 2
+freedom energy. The folds solve F = dF/dq = 0, a 2 x 2
 system that stays well conditioned at the fold (the w-problem is coercive on Y); its starting
 point is the fold (q0, alpha0) of the one-mode function F0(q, alpha) = dE[q psi](psi) (w
 dropped), itself located on the one-mode diagram.
@@ -40,7 +40,6 @@ the coercive matrix Z^T H Z per tangent, Newton's iterations are never different
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 
 import jax
@@ -188,7 +187,7 @@ def reduced_derivatives(q, alpha, red, scene, disc) -> dict:
 
 def reduced_energy(x, alpha, args):
     """e(q, alpha) = E_alpha(q psi + w(q, alpha)) with x = [q]; args = (red, scene, disc).
-    Its q-derivative is F (the continuation energy of the reduced route)."""
+    Its q-derivative is F: a one-unknown energy for the generic continuation."""
     red, scene, disc = args
     theta, _ = reduced_state(x[0], alpha, red, scene, disc)
     return _energy(theta, alpha, scene, disc)
@@ -329,13 +328,6 @@ def reduced_folds(scene: DipoleMagnet, n: int = 16, tol: float = 1e-13) -> list[
             correction_residual=float(inner[i, 1])))
     folds.sort(key=lambda f: f.alpha_deg)
     return [dataclasses.replace(f, kind=k) for f, k in zip(folds, ("lower", "upper"))]
-
-
-@functools.partial(jax.jit, static_argnames="capacity")
-def _reduced_diagram(red, scene, disc, options, capacity):
-    trace = lambda d: continuation_run(reduced_energy, jnp.zeros(1), 0.0, (red, scene, disc),
-                                       options, capacity, d)
-    return jax.vmap(trace)(jnp.array([-1.0, 1.0]))
 
 
 def second_variation_checks(q, alpha, red: Reduction, scene: DipoleMagnet,
