@@ -24,6 +24,17 @@ def test_fold_pairs_agree_with_the_continuation_route_and_flag_missing_folds():
     assert int(np.max(np.asarray(iterations)[:E.size])) <= 8
 
 
+def test_fold_pairs_at_strongly_bent_folds_match_locate_folds():
+    # small clearances: the upper fold's tip at 60-80 degrees (benchmarks/extreme.py)
+    Ds = np.array([1.1, 1.05, 1.03])
+    alphas, converged, _ = fold_pairs(np.full(3, 2.2), np.full(3, 0.0236), Ds)
+    assert np.asarray(converged).all()
+    for i, Di in enumerate(Ds):
+        ref = magnet.locate_folds(magnet.make_scene(2.2, 0.0236, Di), n=16).folds
+        got = np.degrees(np.asarray(alphas[i]))
+        assert np.max(np.abs(got - [f.alpha_deg for f in ref])) < 1e-9
+
+
 def test_fold_pairs_float32_loses_about_four_digits():
     G, M = np.array([2.2, 4.4]), np.array([0.0236, 0.0472])
     a64, c64, _ = fold_pairs(G, M, np.full(2, D))
