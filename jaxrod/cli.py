@@ -218,6 +218,61 @@ def _folds_reduced(scene, info, args) -> int:
     return 0 if out["converged"] else 1
 
 
+def cmd_outofplane(args) -> int:
+    import numpy as np
+
+    from jaxrod.analysis.magnet import _equilibrium, trace_diagram
+    from jaxrod.analysis.outofplane import out_of_plane_batch
+    from jaxrod.discretise.planar import planar_discretisation
+
+    scene, info = _magnet_scene_from_args(args)
+    branch = trace_diagram(scene, args.n)
+    disc = planar_discretisation(args.n, "clamped")
+    if args.alpha is None:
+        theta, alpha, stable = branch.theta, branch.alpha, branch.stable
+    else:
+        a = np.radians(args.alpha)
+        if not -90.0 <= args.alpha <= 90.0:
+            raise ParameterError(f"alpha: must lie in [-90, 90] degrees, got {args.alpha}")
+        crossing = np.nonzero((branch.alpha[:-1] - a) * (branch.alpha[1:] - a) <= 0.0)[0]
+        theta, alpha, stable = [], [], []
+        for i in crossing:
+            res = _equilibrium(branch.theta[i], a, scene, disc)
+            if bool(res.converged):
+                theta.append(np.asarray(res.x))
+                alpha.append(a)
+                stable.append(bool(branch.stable[i] and branch.stable[i + 1]))
+        theta, alpha, stable = np.array(theta), np.array(alpha), np.array(stable)
+    rows = []
+    if len(alpha):
+        r = {k: np.asarray(v) for k, v in out_of_plane_batch(theta, alpha, scene, disc).items()}
+        for i in range(len(alpha)):
+            rows.append({"alpha_deg": float(np.degrees(alpha[i])), "planar_stable": bool(stable[i]),
+                         "min_eig_perp": float(r["min_eig_perp"][i]),
+                         "min_eig_perp_formula": float(r["min_eig_perp_formula"][i]),
+                         "min_eig_plane": float(r["min_eig_plane"][i]),
+                         "coupling": float(r["coupling"][i]),
+                         "theta_in_0_pi": bool(r["theta_in_0_pi"][i]), "g1": float(r["g1"][i])})
+    out = info | {"n": args.n, "points": rows,
+                  "min_eig_perp_on_stable": min((x["min_eig_perp"] for x in rows
+                                                 if x["planar_stable"]), default=None)}
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.8g}, N = {args.n}: "
+          f"{len(rows)} planar equilibria")
+    print(f"{'alpha deg':>11} {'planar':>8} {'min eig perp':>13} {'(formula)':>11} "
+          f"{'min eig plane':>14} {'coupling':>9}")
+    for x in rows:
+        print(f"{x['alpha_deg']:11.5f} {'stable' if x['planar_stable'] else 'unstable':>8} "
+              f"{x['min_eig_perp']:13.6g} {x['min_eig_perp_formula']:11.6g} "
+              f"{x['min_eig_plane']:14.6g} {x['coupling']:9.1e}")
+    if out["min_eig_perp_on_stable"] is not None:
+        print(f"smallest out-of-plane eigenvalue on planar-stable points: "
+              f"{out['min_eig_perp_on_stable']:.6g} (> 0: out-of-plane stable)")
+    return 0
+
+
 def cmd_certify(args) -> int:
     from jaxrod.analysis.contraction import certify
 
@@ -419,6 +474,13 @@ def build_parser() -> argparse.ArgumentParser:
     magnet_inputs(f)
     f.add_argument("--method", choices=["moore-spence", "reduced"], default="moore-spence")
     f.set_defaults(func=cmd_folds)
+
+    o = sub.add_parser("outofplane", help="out-of-plane stability of planar equilibria (3D)")
+    magnet_inputs(o)
+    o.add_argument("--alpha", type=_float("alpha"), default=None,
+                   help="magnet angle (deg): the equilibria at this angle; default: the branch")
+    o.add_argument("--branch", action="store_true", help="the whole diagram (the default)")
+    o.set_defaults(func=cmd_outofplane)
 
     c = sub.add_parser("certify", help="hypotheses of the paper's reduction, with margins")
     magnet_inputs(c)
