@@ -20,4 +20,4 @@ def test_nonlinear_branch_reproduces_the_a2_formula(support, G, kind):
     assert abs(branch.fit_A2(terms=5) - formula.A2) <= 1e-4 * abs(formula.A2)
     # the branch really is nonlinear and on the predicted side of A_crit
     assert np.all(np.sign(branch.A - branch.A_crit) == np.sign(formula.A2))
-    assert np.max(np.abs(branch.theta)) > 0.2
+    assert np.max(np.abs(branch.states)) > 0.2

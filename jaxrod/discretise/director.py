@@ -27,6 +27,7 @@ import math
 import jax
 import jax.numpy as jnp
 
+from jaxrod import spectral
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 
 #: Below this |v|^2 the chart functions use their Taylor series (7 terms, error < 1e-24);
@@ -91,6 +92,18 @@ class DirectorDiscretisation:
 
     def integrate(self, f_quad):
         return self.planar.integrate(f_quad)
+
+    def inner(self, x, y):
+        """L2(0, 1) inner product of two chart fields, int (x1 y1 + x2 y2) ds."""
+        (x1, x2), (y1, y2) = self.split(x), self.split(y)
+        return self.planar.inner(x1, y1) + self.planar.inner(x2, y2)
+
+    def centreline(self, x, s) -> jax.Array:
+        """r(s) = int_0^s d3 (rod lengths) at the points s in [0, 1], shape (len(s), 3), for
+        plots: d3 at the Chebyshev nodes, integrated and interpolated spectrally."""
+        v1, v2 = (self.planar.full_values(v) for v in self.split(x))
+        r_nodes = self.planar.cumint @ director(v1, v2)
+        return jnp.asarray(spectral.interpolation_matrix(self.planar.n, s)) @ r_nodes
 
     def from_planar(self, theta):
         """The 3D state of a planar one (v1 = theta, v2 = 0)."""
