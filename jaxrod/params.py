@@ -49,7 +49,9 @@ class ParameterError(ValueError):
     """An input outside its valid range; the message names the parameter and the range."""
 
 
-def _check(name: str, value, ok, requirement: str) -> float:
+def check_value(name: str, value, ok, requirement: str) -> float:
+    """Return ``value`` as a float if it is finite and ``ok(value)``, else raise
+    ``ParameterError`` naming the parameter and the ``requirement`` ("in (0, 90) degrees")."""
     try:
         x = float(value)
     except (TypeError, ValueError):
@@ -61,19 +63,19 @@ def _check(name: str, value, ok, requirement: str) -> float:
 
 def check_positive(name: str, value, unit: str = "") -> float:
     """Return ``value`` as a float if it is a finite number > 0, else raise."""
-    return _check(name, value, lambda x: x > 0.0,
+    return check_value(name, value, lambda x: x > 0.0,
                   f"a finite number > 0{' ' + unit if unit else ''}")
 
 
 def check_nonnegative(name: str, value, unit: str = "") -> float:
     """Return ``value`` as a float if it is a finite number >= 0, else raise."""
-    return _check(name, value, lambda x: x >= 0.0,
+    return check_value(name, value, lambda x: x >= 0.0,
                   f"a finite number >= 0{' ' + unit if unit else ''}")
 
 
 def check_finite(name: str, value) -> float:
     """Return ``value`` as a float if it is finite, else raise."""
-    return _check(name, value, lambda x: True, "a finite number")
+    return check_value(name, value, lambda x: True, "a finite number")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -234,6 +234,7 @@ EXPERIMENT_D = 11.25 / 9.2
 def permanent_magnet_report(n: int | None = None) -> dict:
     """Folds, widths and the hysteresis loop at the experiment's parameters."""
     from jaxrod.analysis.magnet import DEFAULT_N, hysteresis_sweep, locate_folds, make_scene
+    from jaxrod.analysis.outofplane import branch_verdict
     from jaxrod.params import NDFEB_MAGNET
 
     n = n or DEFAULT_N
@@ -258,7 +259,9 @@ def permanent_magnet_report(n: int | None = None) -> dict:
                 })
             cases.append({"E_GPa": e_gpa, "inputs": inputs, "G": g, "M": m, "D": d, "n": n,
                           "folds": folds, "hysteresis_width_deg": report.hysteresis_width_deg,
-                          "paper_width_deg": PAPER_WIDTHS[e_gpa], "converged": report.converged})
+                          "paper_width_deg": PAPER_WIDTHS[e_gpa], "converged": report.converged,
+                          "out_of_plane": branch_verdict(make_scene(g, m, d), report.branch,
+                                                         report.folds, n)})
     G, M = PAPER_GROUPS[200]
     sweep = hysteresis_sweep(make_scene(G, M, EXPERIMENT_D), n=n)
     return {"cases": cases, "reduced_route": reduced_route_report(cases, n),
@@ -320,6 +323,21 @@ def format_permanent_magnet_report(rep: dict) -> str:
                    f"{r['alpha_star_minus_moore_spence_deg']:+.1e} | {r['K']:.4g} | "
                    f"{'hold' if r['hypotheses_hold'] else 'FAIL'} | "
                    f"{'hold' if r['scene_hypotheses_hold'] else 'FAIL'} |")
+    out += ["", "Out of plane (3D Hessian on the director discretisation at every point of the "
+            "traced planar diagram):", "",
+            "| E GPa | inputs | min eig Q_perp on stable points | at alpha deg | coupling | "
+            "vs formula | 0 < theta < pi, g1 < 0 (engaged) | smallest eig at folds | verdict |",
+            "|" + "---|" * 9]
+    for c in rep["cases"]:
+        v = c["out_of_plane"]
+        in_plane = all(f["smallest_is_in_plane"] for f in v["folds"])
+        out.append(
+            f"| {c['E_GPa']} | {c['inputs']} | {v['min_eig_perp_on_stable']:.6f} | "
+            f"{v['at_alpha_deg']:.3f} | {v['max_coupling']:.1e} | "
+            f"{v['max_rel_diff_formula']:.1e} | "
+            f"{'hold' if v['engaged_theta_in_0_pi'] and v['engaged_g1_negative'] else 'FAIL'} | "
+            f"{'in-plane' if in_plane else 'OUT-OF-PLANE'} | "
+            f"{'planar loop stable in 3D' if v['stable_out_of_plane'] else 'UNSTABLE in 3D'} |")
     out += ["", "Hysteresis sweep (E = 200 GPa, -50 -> 50 -> -50 deg, 0.25 deg steps): snaps at"]
     for s in rep["sweep_E200"]["snaps"]:
         out.append(f"- {s['direction']}: alpha = {s['alpha_deg']:.2f} deg, tip "

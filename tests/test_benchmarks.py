@@ -81,3 +81,13 @@ def test_conditioning_quick(tmp_path):
         assert c["full"][0] > 1e3 * c["full"][-1] / 10 and c["full"][0] > 1e6
         assert max(c["reduced"]) < 100 and max(c["moore_spence"]) < 1e4
         assert max(c["w_problem"]) / min(c["w_problem"]) < 1.1
+
+
+def test_three_d_cost_quick(tmp_path):
+    result = run_quick("three_d_cost.py", tmp_path)
+    for r in result["rows"]:
+        assert r["converged"], r
+        # the 3D solve restricted to the plane is the planar one: equal accuracy
+        assert abs(r["fold_error_3d_deg"] - r["fold_error_planar_deg"]) < 1e-10
+        assert abs(r["equilibrium_error_3d_deg"] - r["equilibrium_error_planar_deg"]) < 1e-10
+    assert (tmp_path / "three_d_cost.png").exists()

@@ -71,6 +71,12 @@ def test_reproduce_writes_report(tmp_path):
     assert len(reduced) == 4 and all(r["converged"] for r in reduced)
     assert all(abs(r["alpha_star_minus_moore_spence_deg"]) < 1e-10 for r in reduced)
     assert [r["hypotheses_hold"] for r in reduced] == [True, True, True, False]
+    for case in json.loads((tmp_path / "report.json").read_text())["permanent_magnet"]["cases"]:
+        v = case["out_of_plane"]
+        assert v["stable_out_of_plane"] and v["max_coupling"] == 0.0
+        assert v["min_eig_perp_on_stable"] > 1.0 and v["max_rel_diff_formula"] < 1e-9
+        assert [f["smallest_is_in_plane"] for f in v["folds"]] == [True, True]
+    assert "planar loop stable in 3D" in proc.stdout
 
 
 MAGNET = ["--G", "2.2", "--M", "0.0236", "--D", str(11.25 / 9.2)]

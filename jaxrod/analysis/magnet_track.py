@@ -33,11 +33,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.director import DirectorDiscretisation, director_discretisation
+from jaxrod.params import check_finite, check_value
 from jaxrod.scenes.dipole import DipoleMagnet
 from jaxrod.scenes.three_d import DipoleMagnet3D, magnet_position
 from jaxrod.solvers.continuation import STATUS_MESSAGES, ContinuationOptions, continuation_run
-from jaxrod.solvers.folds import moore_spence_solve
 from jaxrod.solvers.descent import descend
+from jaxrod.solvers.folds import moore_spence_solve
 
 
 @jax.tree_util.register_dataclass
@@ -55,8 +56,9 @@ class GreatCircleTrack:
 def tilted_track(alpha0_deg: float, tilt_deg: float) -> GreatCircleTrack:
     """The great circle through the in-plane position at polar angle alpha0, leaving the
     plane at angle ``tilt`` to the meridian (0: the planar track; 90: heading along e2)."""
-    if not 0.0 < alpha0_deg < 90.0:
-        raise ValueError(f"alpha0_deg must lie in (0, 90) degrees, got {alpha0_deg}")
+    check_value("alpha0_deg (start of the track)", alpha0_deg, lambda x: 0.0 < x < 90.0,
+           "in (0, 90) degrees")
+    check_finite("tilt_deg (angle of the track to the meridian)", tilt_deg)
     a, b = math.radians(alpha0_deg), math.radians(tilt_deg)
     meridian = jnp.array([math.cos(a), 0.0, -math.sin(a)])
     return GreatCircleTrack(magnet_position(a), math.cos(b) * meridian
@@ -161,9 +163,10 @@ class TrackBranch:
 def trace_track(scene: DipoleMagnet, alpha0_deg: float = 20.0, tilt_deg: float = 90.0,
                 n: int = 16, t_max_deg: float = 60.0, max_points: int = 300) -> TrackBranch:
     """Follow the rod in 3D as the magnet moves along ``tilted_track(alpha0, tilt)`` from
-    t = 0 (the local minimum reached from the straight rod) to t_max, through folds; each fold is refined."""
-    if not 0.0 < t_max_deg <= 180.0:
-        raise ValueError(f"t_max_deg must lie in (0, 180] degrees, got {t_max_deg}")
+    t = 0 (the local minimum reached from the straight rod) to t_max, through folds; each
+    fold is refined."""
+    check_value("t_max_deg (end of the track)", t_max_deg, lambda x: 0.0 < x <= 180.0,
+           "in (0, 180] degrees")
     track = tilted_track(alpha0_deg, tilt_deg)
     disc = director_discretisation(n)
     options = ContinuationOptions(ds=0.02, ds_min=1e-8, ds_max=0.05, lam_min=-1e-9,

@@ -77,3 +77,45 @@ def out_of_plane(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation) 
 
 
 out_of_plane_batch = jax.jit(jax.vmap(out_of_plane, in_axes=(0, 0, None, None)))
+
+
+def branch_verdict(scene: DipoleMagnet, branch, folds=(), n: int | None = None) -> dict:
+    """Out-of-plane verdict for a traced planar diagram (``jaxrod.analysis.branch.Branch``):
+    the smallest out-of-plane eigenvalue over its planar-stable points with |alpha| <= 90
+    degrees (where it is
+    attained), the largest in/out-of-plane coupling, the agreement of the 3D Hessian with the
+    paper's formula, the sign conditions on the engaged branch (from alpha = 0 to the upper
+    fold), and at each fold (``Fold`` objects) whether the smallest 3D eigenvalue is in-plane.
+    ``stable_out_of_plane`` is True when Q_perp > 0 at every planar-stable point."""
+    import numpy as np
+
+    from jaxrod.discretise.planar import planar_discretisation
+
+    disc = planar_discretisation(n or branch.theta.shape[1], "clamped")
+    r = {k: np.asarray(v) for k, v in out_of_plane_batch(
+        jnp.asarray(branch.theta), jnp.asarray(branch.alpha), scene, disc).items()}
+    stable = branch.stable & (np.abs(branch.alpha) <= np.pi / 2)  # the track's range
+    i = int(np.argmin(np.where(stable, r["min_eig_perp"], np.inf)))
+    start = int(np.argmin(np.abs(branch.alpha) + np.abs(branch.q)))
+    end = start + int(np.argmax(branch.alpha[start:]))
+    engaged = slice(start + 1, end + 1)
+    fold_rows = []
+    for f in folds:
+        c = out_of_plane(jnp.asarray(f.theta), jnp.radians(f.alpha_deg), scene, disc)
+        fold_rows.append({"kind": f.kind, "alpha_deg": f.alpha_deg,
+                          "min_eig_plane": float(c["min_eig_plane"]),
+                          "min_eig_perp": float(c["min_eig_perp"]),
+                          "smallest_is_in_plane":
+                              bool(abs(c["min_eig_plane"]) < c["min_eig_perp"])})
+    rel = np.abs(r["min_eig_perp"] - r["min_eig_perp_formula"]) / np.abs(r["min_eig_perp"])
+    return {
+        "min_eig_perp_on_stable": float(r["min_eig_perp"][i]),
+        "at_alpha_deg": float(np.degrees(branch.alpha[i])),
+        "max_coupling": float(r["coupling"].max()),
+        "max_rel_diff_formula": float(rel.max()),
+        "engaged_theta_in_0_pi": bool(r["theta_in_0_pi"][engaged].all()),
+        "engaged_g1_negative": bool((r["g1"][engaged] < 0).all()),
+        "folds": fold_rows,
+        "stable_out_of_plane": bool(r["min_eig_perp"][i] > 0.0),
+        "points": int(len(branch.alpha)),
+    }
