@@ -10,12 +10,11 @@ Writes benchmarks/results/conditioning.{json,md,png}.
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
+from common import benchmark_main, write_results
 
 import jaxrod  # noqa: F401
 from jaxrod.analysis import magnet
@@ -23,7 +22,6 @@ from jaxrod.analysis.conditioning import conditioning_near_fold
 from jaxrod.analysis.reduction import reduced_folds
 from jaxrod.plotting import CONDITIONING_LABELS, conditioning_figure
 
-HERE = Path(__file__).resolve().parent
 D_EXP = 11.25 / 9.2
 CASES = {"E = 200 GPa": (2.2, 0.0236), "E = 100 GPa": (4.4, 0.0472)}
 
@@ -63,19 +61,13 @@ def markdown(studies: dict) -> str:
     return "\n".join(lines)
 
 
+def write(studies: dict, out: Path) -> None:
+    write_results(out, "conditioning", studies, markdown(studies),
+                  conditioning_figure(studies))
+
+
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="one fold per case, 6 offsets")
-    parser.add_argument("--out", default=str(HERE / "results"))
-    args = parser.parse_args(argv)
-    studies = run(args.quick)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "conditioning.json").write_text(json.dumps(studies, indent=1))
-    (out / "conditioning.md").write_text(markdown(studies))
-    conditioning_figure(studies).savefig(out / "conditioning.png", dpi=110)
-    print(markdown(studies))
-    return 0
+    return benchmark_main(__doc__, run, write, argv, quick_help="one fold per case, 6 offsets")
 
 
 if __name__ == "__main__":

@@ -18,16 +18,16 @@ Writes benchmarks/results/extreme.{json,md}.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
 from pathlib import Path
 
+from common import benchmark_main
+
 import jaxrod  # noqa: F401
 from jaxrod.analysis import magnet
 
-HERE = Path(__file__).resolve().parent
 D_EXP = 11.25 / 9.2
 
 
@@ -147,14 +147,7 @@ def greenhill_cases(quick: bool) -> list[dict]:
     return out
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--out", default=str(HERE / "results"))
-    args = parser.parse_args(argv)
-    result = run(args.quick)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+def write(result: dict, out: Path) -> None:
     (out / "extreme.json").write_text(json.dumps(result, indent=2))
     lines = ["# Stiff and extreme cases", "", "Permanent magnet:", "",
              "| case | folds (alpha deg, tip deg) | N for 1e-10 deg | Moore-Spence iterations | "
@@ -174,7 +167,10 @@ def main(argv=None) -> int:
         lines.append(f"| {g['support']} | {g['G']:g} | {g['A']:g} | {g['beta0']:.10g} | "
                      f"{g['margin']:.8g} | {g['N_for_1e-10']} | {g['default_N']} |")
     (out / "extreme.md").write_text("\n".join(lines) + "\n")
-    return 0
+
+
+def main(argv=None) -> int:
+    return benchmark_main(__doc__, run, write, argv)
 
 
 if __name__ == "__main__":

@@ -18,7 +18,6 @@ Typical output (2-core CPU, excerpt):
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -31,6 +30,7 @@ sys.path.insert(0, str(HERE.parent / "tests"))  # the Airy reference shared with
 import airy_reference as airy  # noqa: E402
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
+from common import benchmark_main  # noqa: E402
 
 import jaxrod  # noqa: E402,F401
 from jaxrod.analysis.greenhill import pitchfork_coefficients  # noqa: E402
@@ -129,13 +129,7 @@ def write(result: dict, out: Path) -> None:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="two cases, N <= 48")
-    parser.add_argument("--out", default=str(HERE / "results"))
-    args = parser.parse_args(argv)
-    result = run(args.quick)
-    write(result, Path(args.out))
-    return 0
+    return benchmark_main(__doc__, run, write, argv, quick_help="two cases, N <= 48")
 
 
 if __name__ == "__main__":

@@ -16,8 +16,6 @@ Writes benchmarks/results/three_d_cost.{json,md,png}.
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import platform
 import time
@@ -26,6 +24,7 @@ from pathlib import Path
 import jax
 import jax.numpy as jnp
 import numpy as np
+from common import benchmark_main, write_results
 
 import jaxrod  # noqa: F401
 from jaxrod.analysis import magnet
@@ -36,7 +35,6 @@ from jaxrod.scenes.three_d import DipoleMagnet3D, magnet_position
 from jaxrod.solvers.folds import moore_spence_solve
 from jaxrod.solvers.newton import newton
 
-HERE = Path(__file__).resolve().parent
 D_EXP = 11.25 / 9.2
 CASES = {"200": (2.2, 0.0236), "100": (4.4, 0.0472)}
 ALPHA, ALPHA_START = math.radians(35.0), math.radians(33.0)
@@ -197,19 +195,12 @@ def figure(result: dict):
     return fig
 
 
+def write(result: dict, out: Path) -> None:
+    write_results(out, "three_d_cost", result, markdown(result), figure(result))
+
+
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="N = 8, 12, 16 only")
-    parser.add_argument("--out", default=str(HERE / "results"))
-    args = parser.parse_args(argv)
-    result = run(args.quick)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "three_d_cost.json").write_text(json.dumps(result, indent=1))
-    (out / "three_d_cost.md").write_text(markdown(result))
-    figure(result).savefig(out / "three_d_cost.png", dpi=110)
-    print(markdown(result))
-    return 0
+    return benchmark_main(__doc__, run, write, argv, quick_help="N = 8, 12, 16 only")
 
 
 if __name__ == "__main__":
