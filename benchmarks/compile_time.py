@@ -85,10 +85,16 @@ def child(imports: str, call: str, cache_dir: str | None) -> dict:
     return out
 
 
+def _without_no_cache(environ) -> dict:
+    """The environment less JAXROD_NO_CACHE (set by the test suite), so that each run here
+    gets exactly the cache it asks for."""
+    return {k: v for k, v in environ.items() if k != "JAXROD_NO_CACHE"}
+
+
 def cli_process(argv: list[str], env: dict) -> float:
     t0 = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", *argv], capture_output=True,
-                          text=True, env=os.environ | env, timeout=900)
+                          text=True, env=_without_no_cache(os.environ) | env, timeout=900)
     if proc.returncode:
         raise RuntimeError(proc.stderr[-500:])
     return time.perf_counter() - t0

@@ -1,4 +1,5 @@
-"""Command-line front end: ``jaxrod greenhill`` and ``jaxrod reproduce``.
+"""Command-line front end: ``jaxrod greenhill | folds | branch | sweep | fit | certify |
+outofplane | track | reproduce`` (``jaxrod -h`` lists them).
 
 Every command prints a human-readable report, or one JSON object with ``--json``. Invalid
 input exits with status 2 and a one-line message naming the parameter.
@@ -395,6 +396,46 @@ def cmd_fit(args) -> int:
     return 0 if result["converged"] else 1
 
 
+def cmd_track(args) -> int:
+    from jaxrod.analysis.magnet_track import trace_track
+
+    scene, info = _magnet_scene_from_args(args)
+    track = trace_track(scene, args.alpha0, args.tilt, n=args.n, t_max_deg=args.t_max)
+    folds = [{"t_deg": f.t_deg, "magnet_polar_deg": f.magnet_polar_deg,
+              "magnet_azimuth_deg": f.magnet_azimuth_deg, "rod_azimuth_deg": f.rod_azimuth_deg,
+              "hessian_smallest": list(f.hessian_smallest), "converged": f.converged,
+              "residual_norm": f.residual_norm} for f in track.folds]
+    out = info | {"n": args.n, "alpha0_deg": args.alpha0, "tilt_deg": args.tilt,
+                  "t_max_deg": args.t_max, "status": track.status, "points": len(track.t_deg),
+                  "max_out_of_plane": float(track.out_of_plane.max()), "folds": folds,
+                  "converged": all(f["converged"] for f in folds)}
+    if args.out is not None:
+        path = Path(args.out)
+        path.mkdir(parents=True, exist_ok=True)
+        with open(path / "track.csv", "w") as fh:
+            fh.write("t_deg,magnet_polar_deg,magnet_azimuth_deg,tip_x,tip_y,tip_z,stable\n")
+            for i in range(len(track.t_deg)):
+                fh.write(f"{track.t_deg[i]:.12g},{track.magnet_polar_deg[i]:.12g},"
+                         f"{track.magnet_azimuth_deg[i]:.12g},"
+                         + ",".join(f"{c:.12g}" for c in track.tip[i])
+                         + f",{int(track.stable[i])}\n")
+        (path / "track.json").write_text(json.dumps(out, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.8g}, N = {args.n}: "
+          f"magnet from {args.alpha0} deg in the plane along a great circle tilted "
+          f"{args.tilt} deg; {len(track.t_deg)} points ({track.status}); largest out-of-plane "
+          f"chart value {out['max_out_of_plane']:.4f} rad")
+    for f in folds:
+        print(f"fold at t = {f['t_deg']:.10f} deg: magnet polar {f['magnet_polar_deg']:.10f} "
+              f"deg, azimuth {f['magnet_azimuth_deg']:.6f} deg; rod azimuth "
+              f"{f['rod_azimuth_deg']:.6f} deg{'' if f['converged'] else ' (NOT converged)'}")
+    if not folds:
+        print("no fold along the track")
+    return 0
+
+
 def cmd_reproduce(args) -> int:
     from jaxrod.reproduce import (
         format_permanent_magnet_report,
@@ -481,6 +522,18 @@ def build_parser() -> argparse.ArgumentParser:
                    help="magnet angle (deg): the equilibria at this angle; default: the branch")
     o.add_argument("--branch", action="store_true", help="the whole diagram (the default)")
     o.set_defaults(func=cmd_outofplane)
+
+    t = sub.add_parser("track", help="3D equilibria and folds along a magnet track that leaves "
+                       "the plane")
+    magnet_inputs(t)
+    t.add_argument("--alpha0", type=_float("alpha0"), default=20.0,
+                   help="start of the track in the plane, polar angle (deg, in (0, 90))")
+    t.add_argument("--tilt", type=_float("tilt"), default=90.0,
+                   help="angle of the great circle to the meridian (deg; 0: planar track)")
+    t.add_argument("--t-max", type=_float("t-max"), default=60.0,
+                   help="length of the track (deg of arc, in (0, 180])")
+    t.add_argument("--out", default=None, help="directory for track.csv and track.json")
+    t.set_defaults(func=cmd_track)
 
     c = sub.add_parser("certify", help="hypotheses of the paper's reduction, with margins")
     magnet_inputs(c)

@@ -129,3 +129,18 @@ def test_magnet_bad_input_exit_2(argv, name):
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and name in lines[0], proc.stderr
+
+
+def test_track_json_and_files(tmp_path, capsys):
+    assert main(["track", *MAGNET, "--alpha0", "20", "--tilt", "90", "--json",
+                 "--out", str(tmp_path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["converged"] and len(out["folds"]) == 2 and out["max_out_of_plane"] > 0.5
+    # the rod snaps where the magnet's polar angle reaches the planar folds (cf. `folds`)
+    assert main(["folds", *MAGNET, "--json"]) == 0
+    planar = sorted(f["alpha_deg"] for f in json.loads(capsys.readouterr().out)["folds"])
+    polar = sorted(f["magnet_polar_deg"] for f in out["folds"])
+    assert polar == pytest.approx(planar, abs=1e-9)
+    lines = (tmp_path / "track.csv").read_text().splitlines()
+    assert lines[0].startswith("t_deg,") and len(lines) == out["points"] + 1
+    assert main(["track", *MAGNET, "--alpha0", "95"]) == 2

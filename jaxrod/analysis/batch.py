@@ -33,7 +33,7 @@ import jax.numpy as jnp
 from jaxrod.analysis.reduction import normalised_mode
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.scenes.dipole import DipoleMagnet, dipole_potential, magnet_direction
-from jaxrod.solvers.folds import _moore_spence_residual
+from jaxrod.solvers.folds import moore_spence_residual
 from jaxrod.solvers.newton import newton
 
 #: The (q, alpha) grid that brackets the one-mode folds: q in [0, Q_MAX], alpha in [0, 90] deg.
@@ -122,7 +122,7 @@ def fold_pair_one(G, M, D, disc: PlanarDiscretisation):
     def moore_spence(x):
         ell = psi / jnp.dot(psi, psi)
         z0 = jnp.concatenate([x[0] * psi, psi, x[1:2]])
-        return newton(_moore_spence_residual, z0, (_energy, ell, (scene, disc)), tol=tol,
+        return newton(moore_spence_residual, z0, (_energy, ell, (scene, disc)), tol=tol,
                       xtol=xtol, stall_xtol=stall, max_steps=20)
 
     ms = jax.vmap(moore_spence)(one.x)

@@ -51,7 +51,7 @@ from jaxrod.params import ParameterError
 from jaxrod.scenes.dipole import DipoleMagnet, tip_angle
 from jaxrod.scenes.terms import bending_energy
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
-from jaxrod.solvers.newton import newton
+from jaxrod.solvers.newton import implicit_newton, newton
 
 
 def mean_functional(disc: PlanarDiscretisation) -> jax.Array:
@@ -144,23 +144,16 @@ def correction(q, alpha, red: Reduction, scene: DipoleMagnet, disc: PlanarDiscre
     and the inner Newton's (converged as 0/1, residual norm, iterations) as floats.
 
     Newton from w = 0 on Z^T grad E(q psi + Z y) = 0; derivatives of w in q, alpha (and in
-    the scene) by implicit differentiation through ``lax.custom_root``.
+    the scene) by implicit differentiation (``implicit_newton``: one solve with the
+    coercive matrix Z^T H Z per tangent).
     """
     Z = red.Z
 
     def projected(y):
         return Z.T @ _gradient(q * red.psi + Z @ y, alpha, scene, disc)
 
-    def solve(f, y0):
-        res = newton(lambda y, _: f(y), y0, None, tol=tol)
-        return res.x, jnp.stack([res.converged.astype(y0.dtype), res.residual_norm,
-                                 res.iterations.astype(y0.dtype)])
-
-    def tangent_solve(g, b):
-        return jnp.linalg.solve(jax.jacfwd(g)(b), b)
-
     y0 = jnp.zeros(Z.shape[1], dtype=red.psi.dtype)
-    y, stats = jax.lax.custom_root(projected, y0, solve, tangent_solve, has_aux=True)
+    y, stats = implicit_newton(projected, y0, tol)
     return Z @ y, stats
 
 

@@ -28,7 +28,7 @@ from typing import Any, NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxrod.solvers.newton import NewtonResult, newton
+from jaxrod.solvers.newton import NewtonResult, implicit_newton, newton
 
 Energy = Callable[[jax.Array, jax.Array, Any], jax.Array]
 
@@ -47,7 +47,9 @@ def _hvp(energy, x, lam, args, v):
     return jax.jvp(g, (x,), (v,))[1]
 
 
-def _moore_spence_residual(z, data):
+def moore_spence_residual(z, data):
+    """[grad E(x, lam); H(x, lam) phi; l . phi - 1] for z = (x, phi, lam), data =
+    (energy, l, args)."""
     energy, ell, args = data
     m = ell.shape[0]
     x, phi, lam = z[:m], z[m:2 * m], z[-1]
@@ -58,7 +60,7 @@ def _moore_spence_residual(z, data):
 def _solve_fold(energy, x0, lam0, phi0, args, tol):
     ell = phi0 / jnp.dot(phi0, phi0)
     z0 = jnp.concatenate([x0, phi0, jnp.atleast_1d(lam0)])
-    res = newton(_moore_spence_residual, z0, (energy, ell, args), tol=tol)
+    res = newton(moore_spence_residual, z0, (energy, ell, args), tol=tol)
     m = x0.shape[0]
     return FoldPoint(res.x[:m], res.x[-1], res.x[m:2 * m], res)
 
@@ -76,28 +78,13 @@ def differentiable_fold(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13
     """(z, stats): the fold z = (x, phi, lam), differentiable in ``args``, and the Newton
     statistics (converged as 0/1, residual norm, iterations) as a float array.
 
-    Implicit differentiation (``lax.custom_root``): the primal is the Newton solve of the
-    Moore-Spence system R(z; args) = 0 from (x0, phi0, lam0), and the tangent is one dense
-    solve with dR/dz at the solution, dz = -(dR/dz)^-1 (dR/dargs) dargs; Newton's iterations
-    are never differentiated, and the starting point carries no gradient. Under ``vmap``
-    each batch element gets its own solve.
+    Implicit differentiation (``jaxrod.solvers.newton.implicit_newton``): the primal is the
+    Newton solve of the Moore-Spence system R(z; args) = 0 from (x0, phi0, lam0), and the
+    tangent is one dense solve with dR/dz at the solution, dz = -(dR/dz)^-1 (dR/dargs) dargs.
     """
     ell = jax.lax.stop_gradient(phi0 / jnp.dot(phi0, phi0))
-    z0 = jax.lax.stop_gradient(jnp.concatenate([x0, phi0, jnp.atleast_1d(lam0)]))
-
-    def residual(z):
-        return _moore_spence_residual(z, (energy, ell, args))
-
-    def solve(f, z_init):
-        res = newton(lambda z, _: f(z), z_init, None, tol=tol)
-        # aux as floats: custom_root's tangent rule cannot carry integer outputs
-        return res.x, jnp.stack([res.converged.astype(z_init.dtype), res.residual_norm,
-                                 res.iterations.astype(z_init.dtype)])
-
-    def tangent_solve(g, y):
-        return jnp.linalg.solve(jax.jacfwd(g)(y), y)
-
-    return jax.lax.custom_root(residual, z0, solve, tangent_solve, has_aux=True)
+    z0 = jnp.concatenate([x0, phi0, jnp.atleast_1d(lam0)])
+    return implicit_newton(lambda z: moore_spence_residual(z, (energy, ell, args)), z0, tol)
 
 
 def fold_coefficients(energy: Energy, x, lam, phi, args, mean: Callable[[jax.Array], Any]):

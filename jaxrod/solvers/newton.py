@@ -129,3 +129,28 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
     final = jax.lax.while_loop(keep_going, step, init)
     converged = final.status == CONVERGED
     return NewtonResult(final.x, converged, final.fnorm, final.k, final.status)
+
+
+def implicit_newton(residual: Callable[[jax.Array], jax.Array], x0: jax.Array,
+                    tol: float = 1e-13):
+    """(x, stats): a root of ``residual`` by ``newton`` from x0, differentiable by the
+    implicit function theorem (``lax.custom_root``).
+
+    ``residual`` closes over the parameters p that x(p) depends on. The primal is Newton's
+    solve; the tangent is one dense solve with the Jacobian at the root,
+    dx = -(dR/dx)^-1 (dR/dp) dp, so Newton's iterations are never differentiated and the
+    starting point carries no gradient. ``stats`` = (converged as 0/1, residual norm,
+    iterations) as a float array (custom_root's tangent rule cannot carry integer outputs).
+    Under ``vmap`` each batch element gets its own solve.
+    """
+
+    def solve(f, z_init):
+        res = newton(lambda z, _: f(z), z_init, None, tol=tol)
+        return res.x, jnp.stack([res.converged.astype(z_init.dtype), res.residual_norm,
+                                 res.iterations.astype(z_init.dtype)])
+
+    def tangent_solve(g, y):
+        return jnp.linalg.solve(jax.jacfwd(g)(y), y)
+
+    return jax.lax.custom_root(residual, jax.lax.stop_gradient(x0), solve, tangent_solve,
+                               has_aux=True)
