@@ -92,9 +92,7 @@ def _start_states(scene, n):
     """(theta at 33 deg, fold guess theta, alpha, null vector) on the planar grid of degree n."""
     disc = planar_discretisation(n)
     branch = magnet.trace_diagram(scene, n)
-    # the engaged branch: from the straight rod at alpha = 0 to the upper fold
-    start = int(np.argmin(np.abs(branch.alpha) + np.abs(branch.q)))
-    engaged = np.arange(start, start + int(np.argmax(branch.alpha[start:])) + 1)
+    engaged = np.arange(len(branch))[branch.engaged]
     i = int(engaged[np.argmin(np.abs(branch.alpha[engaged] - ALPHA_START))])
     start = magnet._equilibrium(jnp.asarray(branch.theta[i]), ALPHA_START, scene, disc)
     f = [j for j in branch.fold_indices if branch.alpha[j] > 0]

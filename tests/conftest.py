@@ -7,11 +7,10 @@ sys.path.insert(0, os.path.dirname(__file__))
 # once aborted inside the cache's write of a compiled program.)
 os.environ.setdefault("JAXROD_NO_CACHE", "1")
 
-import jaxrod  # noqa: E402,F401  (sets float64)
-
-
 import jax  # noqa: E402
 import pytest  # noqa: E402
+
+import jaxrod  # noqa: E402,F401  (sets float64)
 
 
 @pytest.fixture(autouse=True, scope="module")

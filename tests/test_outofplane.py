@@ -84,10 +84,8 @@ def test_out_of_plane_form_is_positive_on_the_engaged_branch_and_matches_the_for
     report = magnet.locate_folds(scene, n=N)
     b = report.branch
     upper = [f for f in report.folds if f.kind == "upper"][0]
-    start = int(np.argmin(np.abs(b.alpha) + np.abs(b.q)))
-    # engaged: from the straight rod up to the upper fold
-    end = start + int(np.argmax(b.alpha[start:]))
-    sel = slice(start, end + 1)
+    sel = b.engaged  # from the straight rod up to the upper fold
+    start = sel.start
     r = {k: np.asarray(v) for k, v in out_of_plane_batch(
         jnp.asarray(b.theta[sel]), jnp.asarray(b.alpha[sel]), scene, disc).items()}
     assert r["coupling"].max() == 0.0

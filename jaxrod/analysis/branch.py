@@ -48,6 +48,17 @@ class Branch:
         t = self.tangent_alpha
         return np.nonzero(np.sign(t[:-1]) * np.sign(t[1:]) < 0)[0]
 
+    @property
+    def straight_index(self) -> int:
+        """Index of the straight rod (alpha = 0, q = 0), where both traced runs start."""
+        return int(np.argmin(np.abs(self.alpha) + np.abs(self.q)))
+
+    @property
+    def engaged(self) -> slice:
+        """The engaged branch: from the straight rod to the largest alpha (the upper fold)."""
+        start = self.straight_index
+        return slice(start, start + int(np.argmax(self.alpha[start:])) + 1)
+
     def __len__(self) -> int:
         return self.alpha.shape[0]
 

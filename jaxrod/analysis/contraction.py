@@ -167,7 +167,7 @@ def certify(scene: DipoleMagnet, n: int = 16) -> dict:
             "constants": {k: _finite_or_none(v) for k, v in c.items()},
             "hypotheses": [v.as_dict() for v in point_hypotheses(c)]})
     branch = trace_diagram(scene, n, default_options(BRANCH_POINTS)._replace(ds_max=0.01))
-    start = int(np.argmin(np.abs(branch.alpha) + np.abs(branch.q)))
+    start = branch.straight_index
     q, alpha = branch.q[start:], branch.alpha[start:]
     c = contraction_constants_batch(q, alpha, red, scene, disc)
     c = {k: np.asarray(v) for k, v in c.items()}

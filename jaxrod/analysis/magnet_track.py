@@ -72,9 +72,10 @@ def track_energy(x, t, args):
 
 
 def _polar_azimuth(vec):
-    """(polar angle from e3, azimuth from e1) of 3-vectors (last axis), radians."""
-    return (jnp.arctan2(jnp.linalg.norm(vec[..., :2], axis=-1), vec[..., 2]),
-            jnp.arctan2(vec[..., 1], vec[..., 0]))
+    """(polar angle from e3, azimuth from e1) of 3-vectors (last axis), radians (host)."""
+    vec = np.asarray(vec)
+    return (np.arctan2(np.hypot(vec[..., 0], vec[..., 1]), vec[..., 2]),
+            np.arctan2(vec[..., 1], vec[..., 0]))
 
 
 def _tip(x, disc: DirectorDiscretisation):
@@ -137,15 +138,15 @@ class TrackBranch:
 
     @property
     def magnet_polar_deg(self) -> np.ndarray:
-        return np.degrees(np.asarray(_polar_azimuth(jnp.asarray(self.magnet))[0]))
+        return np.degrees(_polar_azimuth(self.magnet)[0])
 
     @property
     def magnet_azimuth_deg(self) -> np.ndarray:
-        return np.degrees(np.asarray(_polar_azimuth(jnp.asarray(self.magnet))[1]))
+        return np.degrees(_polar_azimuth(self.magnet)[1])
 
     @property
     def rod_azimuth_deg(self) -> np.ndarray:
-        return np.degrees(np.asarray(_polar_azimuth(jnp.asarray(self.tip))[1]))
+        return np.degrees(_polar_azimuth(self.tip)[1])
 
     @property
     def out_of_plane(self) -> np.ndarray:

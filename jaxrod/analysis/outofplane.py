@@ -96,17 +96,17 @@ def branch_verdict(scene: DipoleMagnet, branch, folds=(), n: int | None = None) 
         jnp.asarray(branch.theta), jnp.asarray(branch.alpha), scene, disc).items()}
     stable = branch.stable & (np.abs(branch.alpha) <= np.pi / 2)  # the track's range
     i = int(np.argmin(np.where(stable, r["min_eig_perp"], np.inf)))
-    start = int(np.argmin(np.abs(branch.alpha) + np.abs(branch.q)))
-    end = start + int(np.argmax(branch.alpha[start:]))
-    engaged = slice(start + 1, end + 1)
+    e = branch.engaged
+    engaged = slice(e.start + 1, e.stop)  # theta = 0 at the straight rod itself
     fold_rows = []
-    for f in folds:
-        c = out_of_plane(jnp.asarray(f.theta), jnp.radians(f.alpha_deg), scene, disc)
-        fold_rows.append({"kind": f.kind, "alpha_deg": f.alpha_deg,
-                          "min_eig_plane": float(c["min_eig_plane"]),
-                          "min_eig_perp": float(c["min_eig_perp"]),
-                          "smallest_is_in_plane":
-                              bool(abs(c["min_eig_plane"]) < c["min_eig_perp"])})
+    if folds:
+        c = out_of_plane_batch(jnp.asarray(np.stack([f.theta for f in folds])),
+                               jnp.radians(jnp.asarray([f.alpha_deg for f in folds])), scene,
+                               disc)
+        for i, f in enumerate(folds):
+            plane, perp = float(c["min_eig_plane"][i]), float(c["min_eig_perp"][i])
+            fold_rows.append({"kind": f.kind, "alpha_deg": f.alpha_deg, "min_eig_plane": plane,
+                              "min_eig_perp": perp, "smallest_is_in_plane": abs(plane) < perp})
     rel = np.abs(r["min_eig_perp"] - r["min_eig_perp_formula"]) / np.abs(r["min_eig_perp"])
     return {
         "min_eig_perp_on_stable": float(r["min_eig_perp"][i]),
