@@ -32,8 +32,8 @@ import jax.numpy as jnp
 
 from jaxrod.analysis.reduction import normalised_mode
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
-from jaxrod.scenes.dipole import DipoleMagnet, dipole_potential, magnet_direction
-from jaxrod.solvers.folds import moore_spence_residual
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, dipole_potential, magnet_direction
+from jaxrod.solvers.folds import moore_spence_jacobian, moore_spence_residual
 from jaxrod.solvers.newton import newton
 
 #: The (q, alpha) grid that brackets the one-mode folds: q in [0, Q_MAX], alpha in [0, 90] deg.
@@ -44,11 +44,6 @@ CANDIDATES = 64
 #: Newton tolerances per precision: (tol on |residual|, xtol, stall_xtol).
 TOLERANCES = {jnp.dtype("float64"): (1e-13, 1e-10, 1e-7),
               jnp.dtype("float32"): (1e-5, 1e-4, 1e-3)}
-
-
-def _energy(theta, alpha, args):
-    scene, disc = args
-    return scene.with_alpha(alpha).energy(theta, disc)
 
 
 def _one_mode_moments(q, psi_quad, disc):
@@ -122,8 +117,8 @@ def fold_pair_one(G, M, D, disc: PlanarDiscretisation):
     def moore_spence(x):
         ell = psi / jnp.dot(psi, psi)
         z0 = jnp.concatenate([x[0] * psi, psi, x[1:2]])
-        return newton(moore_spence_residual, z0, (_energy, ell, (scene, disc)), tol=tol,
-                      xtol=xtol, stall_xtol=stall, max_steps=20)
+        return newton(moore_spence_residual, z0, (ALPHA_MODEL, ell, (scene, disc)), tol=tol,
+                      xtol=xtol, stall_xtol=stall, max_steps=20, jacobian=moore_spence_jacobian)
 
     ms = jax.vmap(moore_spence)(one.x)
     # the energy is 2 pi-periodic in alpha and symmetric under (theta, alpha) -> -(theta,

@@ -89,18 +89,20 @@ class Branch:
         return ax
 
 
-def branch_from_runs(runs: list[tuple[RawBranch, bool]], observables) -> Branch:
+def branch_from_runs(runs: list[tuple[RawBranch, bool, tuple]]) -> Branch:
     """Concatenate continuation runs (each optionally reversed) into one ``Branch``.
 
-    ``observables(theta_batch, alpha_batch) -> (q, tip, energy)`` evaluates the recorded
-    scalars on the host side in one vectorised call.
+    Each run comes with its observables (q, tip, energy), evaluated on the device over the
+    run's whole fixed-capacity arrays (so their program never depends on the branch length).
     """
     parts, status, complete = [], [], True
-    for raw, reverse in runs:
+    for raw, reverse, (q, tip, energy) in runs:
         k = int(raw.num_points)
         fields = {f: np.asarray(getattr(raw, f))[:k] for f in
                   ("x", "lam", "tangent_lam", "min_eig", "morse_index", "newton_iterations",
                    "residual_norm")}
+        fields |= {"q": np.asarray(q)[:k], "tip": np.asarray(tip)[:k],
+                   "energy": np.asarray(energy)[:k]}
         if reverse:
             fields = {f: v[::-1] for f, v in fields.items()}
             fields["tangent_lam"] = -fields["tangent_lam"]
@@ -111,8 +113,7 @@ def branch_from_runs(runs: list[tuple[RawBranch, bool]], observables) -> Branch:
     if len(parts) == 2:
         parts[1] = {f: v[1:] for f, v in parts[1].items()}
     cat = {f: np.concatenate([p[f] for p in parts]) for f in parts[0]}
-    q, tip, energy = (np.asarray(v) for v in observables(cat["x"], cat["lam"]))
-    return Branch(alpha=cat["lam"], theta=cat["x"], q=q, tip=tip, energy=energy,
-                  min_eig=cat["min_eig"], morse_index=cat["morse_index"],
+    return Branch(alpha=cat["lam"], theta=cat["x"], q=cat["q"], tip=cat["tip"],
+                  energy=cat["energy"], min_eig=cat["min_eig"], morse_index=cat["morse_index"],
                   tangent_alpha=cat["tangent_lam"], newton_iterations=cat["newton_iterations"],
                   residual_norm=cat["residual_norm"], status=tuple(status), complete=complete)

@@ -106,14 +106,18 @@ def pitchfork_coefficients(G, disc: PlanarDiscretisation):
     return beta0, a2_quartic, a2_gradient
 
 
-def greenhill_load(n: int = 40) -> float:
-    """G_crit: smallest G with beta0^cl(G) = 0, from int u'^2 = G int (1 - s) u^2."""
-    disc = planar_discretisation(n, "clamped")
+@jax.jit
+def _greenhill_load(disc: PlanarDiscretisation):
     K = _straight_hessian(0.0, disc)
     W = K - _straight_hessian(1.0, disc)  # matrix of int (1 - s) u^2 (SPD)
     _, u = _smallest_generalised_eigenpair(K, W)
     uq, duq = disc.at_quadrature(u)
-    return float(disc.integrate(duq**2) / disc.integrate((1.0 - disc.quad_nodes) * uq**2))
+    return disc.integrate(duq**2) / disc.integrate((1.0 - disc.quad_nodes) * uq**2)
+
+
+def greenhill_load(n: int = 40) -> float:
+    """G_crit: smallest G with beta0^cl(G) = 0, from int u'^2 = G int (1 - s) u^2."""
+    return float(_greenhill_load(planar_discretisation(n, "clamped")))
 
 
 def criticality(a2: float) -> str:

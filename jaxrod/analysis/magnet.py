@@ -24,7 +24,7 @@ import numpy as np
 from jaxrod.analysis.branch import Branch, branch_from_runs
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import ParameterError, check_groups, check_track_clearance
-from jaxrod.scenes.dipole import DipoleMagnet, tip_angle, tip_position
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle, tip_position
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.descent import descend
 from jaxrod.solvers.folds import differentiable_fold, fold_coefficients, moore_spence_solve
@@ -49,11 +49,14 @@ def make_scene(G: float, M: float, D: float, magnet_radius: float | None = None)
     return DipoleMagnet(float(G), float(M), float(D), 0.0)
 
 
-@jax.jit
-def _observables(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
+def _observables_of(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
+    """(q, tip angle, energy) at rows of theta and alpha (NaN rows stay NaN)."""
     one = lambda th, a: (disc.mean(th), tip_angle(th, disc),
-                         scene.with_alpha(a).energy(th, disc))
+                         ALPHA_MODEL.energy(th, a, (scene, disc)))
     return jax.vmap(one)(theta, alpha)
+
+
+_observables = jax.jit(_observables_of)
 
 
 def default_options(max_points: int = 400) -> ContinuationOptions:
@@ -64,27 +67,36 @@ def default_options(max_points: int = 400) -> ContinuationOptions:
 @functools.partial(jax.jit, static_argnames="capacity")
 def _diagram(scene: DipoleMagnet, disc: PlanarDiscretisation, options: ContinuationOptions,
              capacity: int):
-    start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc))
-    trace = lambda d: continuation_run(alpha_energy, start.x, 0.0, (scene, disc), options,
+    start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc),
+                   jacobian=_alpha_jacobian)
+    trace = lambda d: continuation_run(ALPHA_MODEL, start.x, 0.0, (scene, disc), options,
                                        capacity, d)
-    return start, jax.vmap(trace)(jnp.array([-1.0, 1.0]))
+    runs = jax.vmap(trace)(jnp.array([-1.0, 1.0]))
+    observed = jax.vmap(lambda th, a: _observables_of(th, a, scene, disc))(runs.x, runs.lam)
+    return start, runs, observed
 
 
 def _alpha_residual(theta, args):
     alpha, scene, disc = args
-    return jax.grad(alpha_energy)(theta, alpha, (scene, disc))
+    return ALPHA_MODEL.gradient(theta, alpha, (scene, disc))
+
+
+def _alpha_jacobian(theta, args):
+    alpha, scene, disc = args
+    return ALPHA_MODEL.hessian(theta, alpha, (scene, disc))
 
 
 @jax.jit
 def _equilibrium(theta0, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
     """Newton for the equilibrium at magnet angle alpha from theta0 (compiled once)."""
-    return newton(_alpha_residual, theta0, (alpha, scene, disc), tol=1e-13)
+    return newton(_alpha_residual, theta0, (alpha, scene, disc), tol=1e-13,
+                  jacobian=_alpha_jacobian)
 
 
 @jax.jit
 def _relax(theta0, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
     """Energy descent to a local minimum at magnet angle alpha (compiled once)."""
-    return descend(lambda th, a: alpha_energy(th, alpha, a), theta0, (scene, disc))
+    return descend(ALPHA_MODEL, theta0, (scene, disc), lam=alpha)
 
 
 def trace_diagram(scene: DipoleMagnet, n: int = DEFAULT_N,
@@ -95,12 +107,13 @@ def trace_diagram(scene: DipoleMagnet, n: int = DEFAULT_N,
     """
     disc = planar_discretisation(n, "clamped")
     options = options or default_options()
-    start, runs = _diagram(scene, disc, options._replace(max_points=0), options.max_points)
+    start, runs, observed = _diagram(scene, disc, options._replace(max_points=0),
+                                     options.max_points)
     if not bool(start.converged):
         raise RuntimeError(f"no equilibrium at alpha = 0: {start.message()}")
-    left, right = (jax.tree_util.tree_map(lambda v, i=i: v[i], runs) for i in (0, 1))
-    return branch_from_runs([(left, True), (right, False)],
-                            lambda th, a: _observables(th, a, scene, disc))
+    left, right = (jax.tree_util.tree_map(lambda v, i=i: v[i], (runs, observed))
+                   for i in (0, 1))
+    return branch_from_runs([(left[0], True, left[1]), (right[0], False, right[1])])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -144,19 +157,19 @@ class Fold:
 @jax.jit
 def _fold_report(x, alpha, phi, scene: DipoleMagnet, disc: PlanarDiscretisation):
     args = (scene, disc)
-    d_alpha, d_qq, phi_q = fold_coefficients(alpha_energy, x, alpha, phi, args, disc.mean)
+    d_alpha, d_qq, phi_q = fold_coefficients(ALPHA_MODEL, x, alpha, phi, args, disc.mean)
     c = -d_qq / (2.0 * d_alpha)
     X = tip_position(x, disc)
     V = jax.jvp(lambda th: tip_position(th, disc), (x,), (phi_q,))[1]
     T = (X[1] * V[0] - X[0] * V[1]) / jnp.dot(X, X)
-    eigs = jnp.linalg.eigvalsh(jax.hessian(alpha_energy)(x, alpha, args))
+    eigs = jnp.linalg.eigvalsh(ALPHA_MODEL.hessian(x, alpha, args))
     return (d_alpha, d_qq, c, c / T**2, disc.mean(x), tip_angle(x, disc), eigs[:2], phi_q)
 
 
 def _refine_one(theta0, alpha0, scene, disc, tol):
     args = (scene, disc)
-    _, V = jnp.linalg.eigh(jax.hessian(alpha_energy)(theta0, alpha0, args))
-    fp = moore_spence_solve(alpha_energy, theta0, alpha0, V[:, 0], args, tol)
+    _, V = jnp.linalg.eigh(ALPHA_MODEL.hessian(theta0, alpha0, args))
+    fp = moore_spence_solve(ALPHA_MODEL, theta0, alpha0, V[:, 0], args, tol)
     return fp, _fold_report(fp.x, fp.lam, fp.null_vector, scene, disc)
 
 
@@ -169,15 +182,16 @@ def _refine_batch(theta0, alpha0, scene, disc, tol):
 def _fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
     """Approximate folds from a one-sided continuation that stops after the second fold."""
     options = default_options(0)._replace(max_folds=2.0, lam_min=-0.1)
-    start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc))
-    raw = continuation_run(alpha_energy, start.x, 0.0, (scene, disc), options,
+    start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc),
+                   jacobian=_alpha_jacobian)
+    raw = continuation_run(ALPHA_MODEL, start.x, 0.0, (scene, disc), options,
                            FOLD_PAIR_CAPACITY, 1.0)
     t = raw.tangent_lam
     change = t[:-1] * t[1:] < 0.0
     i = jnp.nonzero(change, size=2, fill_value=0)[0]
     j = jnp.where(jnp.abs(t[i]) <= jnp.abs(t[i + 1]), i, i + 1)
-    hess = jax.vmap(jax.hessian(alpha_energy), in_axes=(0, 0, None))(raw.x[j], raw.lam[j],
-                                                                     (scene, disc))
+    hess = jax.vmap(ALPHA_MODEL.hessian, in_axes=(0, 0, None))(raw.x[j], raw.lam[j],
+                                                                (scene, disc))
     phi0 = jax.vmap(lambda H: jnp.linalg.eigh(H)[1][:, 0])(hess)
     found = start.converged & (jnp.sum(change) >= 2)
     return raw.x[j], raw.lam[j], phi0, found
@@ -186,6 +200,7 @@ def _fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
 FOLD_PAIR_CAPACITY = 128
 
 
+@functools.partial(jax.jit, static_argnames=("n", "tol"))
 def fold_angles(G, M, D, n: int = 12, tol: float = 1e-13):
     """(alpha_lower, alpha_upper) in radians and a converged flag, differentiable in G, M, D.
 
@@ -194,19 +209,19 @@ def fold_angles(G, M, D, n: int = 12, tol: float = 1e-13):
     differentiated solution of its Moore-Spence system (``differentiable_fold``). Assumes
     the S-shaped diagram; ``converged`` is False when two folds are not found in (0, 90]
     degrees or a Moore-Spence solve fails. Inputs are not validated here (they may be
-    tracers): validate user input with ``make_scene`` first.
+    tracers): validate user input with ``make_scene`` first. Compiled once per (n, tol):
+    later calls with new values, and ``jax.grad`` of it, reuse the program.
     """
     scene = DipoleMagnet(G, M, D, 0.0)
     disc = planar_discretisation(n, "clamped")
     x0, lam0, phi0, found = _fold_guesses(jax.lax.stop_gradient(scene), disc)
-    solve = lambda x, l, p: differentiable_fold(alpha_energy, x, l, p, (scene, disc), tol)
+    solve = lambda x, l, p: differentiable_fold(ALPHA_MODEL, x, l, p, (scene, disc), tol)
     z, stats = jax.vmap(solve)(x0, lam0, phi0)
     alphas = jnp.sort(z[:, -1])
     converged = found & jnp.all(stats[:, 0] == 1.0) & (alphas[1] - alphas[0] > 1e-9)
     return alphas, converged
 
 
-_fold_angles_jit = jax.jit(fold_angles, static_argnames=("n",))
 
 
 def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13):
@@ -217,7 +232,7 @@ def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13):
     N = 12 reaches the round-off floor at the paper's parameters (use ``locate_folds`` for
     the full report and diagram).
     """
-    alphas, converged = _fold_angles_jit(scene.G, scene.M, scene.D, n=n, tol=tol)
+    alphas, converged = fold_angles(scene.G, scene.M, scene.D, n=n, tol=tol)
     return np.degrees(np.asarray(alphas)), bool(converged)
 
 
@@ -332,14 +347,15 @@ def _folds_on(scene, disc, branch: Branch, n: int, tol) -> FoldReport:
 def _follow_step(carry, alpha, scene, disc):
     theta_prev = carry
     args = (scene, disc)
-    res = newton(lambda th, a: jax.grad(alpha_energy)(th, alpha, a), theta_prev, args, tol=1e-12)
-    H = jax.hessian(alpha_energy)(res.x, alpha, args)
+    res = newton(_alpha_residual, theta_prev, (alpha, *args), tol=1e-12,
+                 jacobian=_alpha_jacobian)
+    H = ALPHA_MODEL.hessian(res.x, alpha, args)
     stable = jnp.linalg.eigvalsh(H)[0] > 0.0
     close = jnp.sqrt(jnp.mean((res.x - theta_prev) ** 2)) < 0.1
     followed = res.converged & stable & close
 
     def snap(_):
-        d = descend(lambda th, a: alpha_energy(th, alpha, a), theta_prev, args)
+        d = descend(ALPHA_MODEL, theta_prev, args, lam=alpha)
         return d.x, d.converged
 
     theta, ok = jax.lax.cond(followed, lambda _: (res.x, res.converged), snap, None)
@@ -402,7 +418,7 @@ def square_root_law(scene: DipoleMagnet, fold: Fold, n: int = DEFAULT_N,
             res = _equilibrium(guess, alpha, scene, disc)
             ok &= bool(res.converged)
             dtips.append(abs(float(tip_angle(res.x, disc)) - math.radians(fold.tip_deg)))
-        H = jax.hessian(alpha_energy)(res.x, alpha, (scene, disc))
+        H = ALPHA_MODEL.hessian(res.x, alpha, (scene, disc))
         slope = np.polyfit(np.log(np.radians(offsets_deg)), np.log(dtips), 1)[0]
         out[side] = {"exponent": float(slope), "converged": ok,
                      "stable": bool(jnp.linalg.eigvalsh(H)[0] > 0.0)}

@@ -48,7 +48,7 @@ import numpy as np
 
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import ParameterError
-from jaxrod.scenes.dipole import DipoleMagnet, tip_angle
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
 from jaxrod.scenes.terms import bending_energy
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.newton import implicit_newton, newton
@@ -131,11 +131,11 @@ def reduction(scene: DipoleMagnet, disc: PlanarDiscretisation) -> Reduction:
 
 
 def _energy(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
-    return scene.with_alpha(alpha).energy(theta, disc)
+    return ALPHA_MODEL.energy(theta, alpha, (scene, disc))
 
 
 def _gradient(theta, alpha, scene, disc):
-    return jax.grad(_energy)(theta, alpha, scene, disc)
+    return ALPHA_MODEL.gradient(theta, alpha, (scene, disc))
 
 
 def correction(q, alpha, red: Reduction, scene: DipoleMagnet, disc: PlanarDiscretisation,
@@ -152,8 +152,11 @@ def correction(q, alpha, red: Reduction, scene: DipoleMagnet, disc: PlanarDiscre
     def projected(y):
         return Z.T @ _gradient(q * red.psi + Z @ y, alpha, scene, disc)
 
+    def projected_jacobian(y):
+        return Z.T @ ALPHA_MODEL.hessian(q * red.psi + Z @ y, alpha, (scene, disc)) @ Z
+
     y0 = jnp.zeros(Z.shape[1], dtype=red.psi.dtype)
-    y, stats = implicit_newton(projected, y0, tol)
+    y, stats = implicit_newton(projected, y0, tol, jacobian=projected_jacobian)
     return Z @ y, stats
 
 
@@ -337,7 +340,7 @@ def second_variation_checks(q, alpha, red: Reduction, scene: DipoleMagnet,
       xi_mean:  int xi (= 1).
     """
     theta, _ = reduced_state(q, alpha, red, scene, disc)
-    H = jax.hessian(_energy)(theta, alpha, scene, disc)
+    H = ALPHA_MODEL.hessian(theta, alpha, (scene, disc))
     xi = red.psi + jax.jacfwd(lambda t: correction(t, alpha, red, scene, disc)[0])(q)
     Z = red.Z
     KY = Z.T @ stiffness_matrix(disc) @ Z

@@ -78,6 +78,23 @@ class DirectorDiscretisation:
     def support(self) -> str:
         return self.planar.support
 
+    @property
+    def quad_weights(self):
+        return self.planar.quad_weights
+
+    @property
+    def quad_nodes(self):
+        return self.planar.quad_nodes
+
+    @property
+    def jet_matrix(self) -> jax.Array:
+        """(m + 1, 4, size): rows taking x = [v1; v2] to the jet (v1, v2, v1', v2') at each
+        quadrature node (``jaxrod.derivatives``)."""
+        P, Pd = self.planar.to_quad, self.planar.to_quad_diff
+        Z = jnp.zeros_like(P)
+        rows = [jnp.concatenate(pair, axis=1) for pair in ((P, Z), (Z, P), (Pd, Z), (Z, Pd))]
+        return jnp.stack(rows, axis=1)
+
     def split(self, x):
         m = self.planar.size
         return x[:m], x[m:]
@@ -108,6 +125,11 @@ class DirectorDiscretisation:
     def from_planar(self, theta):
         """The 3D state of a planar one (v1 = theta, v2 = 0)."""
         return jnp.concatenate([theta, jnp.zeros_like(theta)])
+
+
+def director_jet(a):
+    """(d3, d3') at one node from its jet a = (v1, v2, v1', v2')."""
+    return jax.jvp(lambda v: director(v[0], v[1]), (a[:2],), (a[2:],))
 
 
 def director_discretisation(n: int, support: str = "clamped") -> DirectorDiscretisation:

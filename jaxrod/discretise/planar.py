@@ -73,6 +73,12 @@ class PlanarDiscretisation:
         """Number of unknowns."""
         return self.n if self.support == "clamped" else self.n + 1
 
+    @property
+    def jet_matrix(self) -> jax.Array:
+        """(m + 1, 2, size): rows taking the unknowns to the jet (theta, theta') at each
+        quadrature node (``jaxrod.derivatives``)."""
+        return jnp.stack([self.to_quad, self.to_quad_diff], axis=1)
+
     def full_values(self, theta: jax.Array) -> jax.Array:
         """All n + 1 nodal values from the free ones."""
         return self.to_full @ theta

@@ -22,6 +22,7 @@ import dataclasses
 import jax
 import jax.numpy as jnp
 
+from jaxrod.derivatives import Structured
 from jaxrod.discretise.planar import PlanarDiscretisation
 from jaxrod.scenes.terms import bending_energy, gravity_energy
 
@@ -64,6 +65,18 @@ class DipoleMagnet:
     D: jax.Array | float
     alpha: jax.Array | float
 
+    def density(self, a, s):
+        """Energy density at one node, a = (theta, theta'): theta'^2 / 2 + G (1 - s) cos."""
+        return 0.5 * a[1] ** 2 + self.G * (1.0 - s) * jnp.cos(a[0])
+
+    def tip_map(self, a):
+        """Integrand of the tip position, d3 = (sin theta, cos theta)."""
+        return jnp.stack([jnp.sin(a[0]), jnp.cos(a[0])])
+
+    def endpoint(self, X):
+        """M Phi_alpha(X)."""
+        return self.M * dipole_potential(X, magnet_direction(self.alpha), self.D)
+
     def energy(self, theta: jax.Array, disc: PlanarDiscretisation) -> jax.Array:
         X = tip_position(theta, disc)
         return (bending_energy(theta, disc) + gravity_energy(theta, disc, self.G)
@@ -71,3 +84,13 @@ class DipoleMagnet:
 
     def with_alpha(self, alpha) -> DipoleMagnet:
         return dataclasses.replace(self, alpha=alpha)
+
+
+def _at_alpha(alpha, args):
+    scene, disc = args
+    return scene.with_alpha(alpha), disc
+
+
+#: E_perm as a function of (theta, alpha) with args = (scene, disc), its derivatives assembled
+#: from the scene's structure (``jaxrod.derivatives``): the model the magnet solvers use.
+ALPHA_MODEL = Structured(_at_alpha)

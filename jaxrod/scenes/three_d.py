@@ -16,7 +16,7 @@ import dataclasses
 import jax
 import jax.numpy as jnp
 
-from jaxrod.discretise.director import DirectorDiscretisation
+from jaxrod.discretise.director import DirectorDiscretisation, director, director_jet
 
 
 def magnet_position(alpha, beta=0.0):
@@ -39,6 +39,14 @@ class UniformField3D:
     G: jax.Array | float
     A: jax.Array | float
 
+    tip_map = None  # no endpoint term (``jaxrod.derivatives``)
+
+    def density(self, a, s):
+        """|d3'|^2 / 2 + G (1 - s) d3 . e3 + A [1 - (d3 . e3)^2] / 2 at one node."""
+        d3, dd3 = director_jet(a)
+        return 0.5 * jnp.dot(dd3, dd3) + self.G * (1.0 - s) * d3[2] \
+            + 0.5 * self.A * (1.0 - d3[2] ** 2)
+
     def energy(self, x, disc: DirectorDiscretisation):
         d3, e = _common(x, disc, self.G)
         return e + 0.5 * self.A * disc.integrate(1.0 - d3[:, 2] ** 2)
@@ -53,6 +61,20 @@ class DipoleMagnet3D:
     M: jax.Array | float
     D: jax.Array | float
     p: jax.Array
+
+    def density(self, a, s):
+        """|d3'|^2 / 2 + G (1 - s) d3 . e3 at one node."""
+        d3, dd3 = director_jet(a)
+        return 0.5 * jnp.dot(dd3, dd3) + self.G * (1.0 - s) * d3[2]
+
+    def tip_map(self, a):
+        """Integrand of the tip position: d3."""
+        return director(a[0], a[1])
+
+    def endpoint(self, X):
+        """M Phi_p(X)."""
+        r = X - self.D * self.p
+        return self.M * jnp.dot(self.p, r) / jnp.dot(r, r) ** 1.5
 
     def energy(self, x, disc: DirectorDiscretisation):
         d3, e = _common(x, disc, self.G)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 
 import jax
+import jax.numpy as jnp
 
 from jaxrod.discretise.planar import PlanarDiscretisation
 from jaxrod.scenes.terms import anisotropy_energy, bending_energy, gravity_energy
@@ -27,6 +28,14 @@ class UniformField:
 
     G: jax.Array | float
     A: jax.Array | float
+
+    tip_map = None  # no endpoint term (``jaxrod.derivatives``)
+
+    def density(self, a, s):
+        """Energy density at one node, a = (theta, theta'):
+        theta'^2 / 2 + G (1 - s) cos(theta) + A sin(theta)^2 / 2."""
+        return 0.5 * a[1] ** 2 + self.G * (1.0 - s) * jnp.cos(a[0]) \
+            + 0.5 * self.A * jnp.sin(a[0]) ** 2
 
     def energy(self, theta: jax.Array, disc: PlanarDiscretisation) -> jax.Array:
         return (bending_energy(theta, disc) + gravity_energy(theta, disc, self.G)

@@ -28,6 +28,7 @@ from typing import Any, NamedTuple
 import jax
 import jax.numpy as jnp
 
+from jaxrod.derivatives import EnergyModel, as_model
 from jaxrod.solvers.newton import newton
 
 RUNNING, REACHED_BOUND, CAPACITY_FULL, STEP_TOO_SMALL, FOLDS_FOUND = 0, 1, 2, 3, 4
@@ -41,7 +42,8 @@ STATUS_MESSAGES = {
     "point, a singular bordered Jacobian or a too-coarse discretisation)",
 }
 
-Energy = Callable[[jax.Array, jax.Array, Any], jax.Array]
+#: An ``EnergyModel`` (assembled derivatives) or a plain energy function E(x, lam, args).
+Energy = EnergyModel | Callable[[jax.Array, jax.Array, Any], jax.Array]
 
 
 class ContinuationOptions(NamedTuple):
@@ -73,35 +75,35 @@ class RawBranch(NamedTuple):
     rejected_steps: jax.Array
 
 
-def _gradient(energy: Energy):
-    return jax.grad(energy, argnums=0)
-
-
 def _wdot(a, b, m):
     return jnp.dot(a[:-1], b[:-1]) / m + a[-1] * b[-1]
 
 
-def _bordered(energy: Energy, y, t, args):
-    """[F_x F_lam; t^T W] at y (the Jacobian of the corrector system)."""
+def _bordered(model: EnergyModel, y, t, args):
+    """[F_x F_lam; t^T W] at y (the Jacobian of the corrector system), and F_x."""
     m = y.shape[0] - 1
-    F = lambda z: _gradient(energy)(z[:-1], z[-1], args)
-    J = jax.jacfwd(F)(y)
+    H, g_lam = model.hessian_and_gradient_lam(y[:-1], y[-1], args)
     w = jnp.append(jnp.full(m, 1.0 / m), 1.0)
-    return jnp.vstack([J, (w * t)[None, :]]), J[:, :-1]
+    return jnp.vstack([jnp.hstack([H, g_lam[:, None]]), (w * t)[None, :]]), H
 
 
 def _corrector_residual(z, data):
-    energy, y_pred, t, args = data
+    model, y_pred, t, args = data
     m = z.shape[0] - 1
-    F = _gradient(energy)(z[:-1], z[-1], args)
+    F = model.gradient(z[:-1], z[-1], args)
     return jnp.append(F, _wdot(t, z - y_pred, m))
+
+
+def _corrector_jacobian(z, data):
+    model, _, t, args = data
+    return _bordered(model, z, t, args)[0]
 
 
 def initial_tangent(energy: Energy, x0, lam0, args, direction: float = 1.0):
     """Unit tangent at a regular point, oriented so that d lam has the sign of ``direction``."""
     y = jnp.append(x0, lam0)
     e = jnp.zeros_like(y).at[-1].set(1.0)
-    B, _ = _bordered(energy, y, e, args)
+    B, _ = _bordered(as_model(energy), y, e, args)
     rhs = jnp.zeros_like(y).at[-1].set(1.0)
     t = jnp.linalg.solve(B, rhs)
     t = t / jnp.sqrt(_wdot(t, t, y.shape[0] - 1))
@@ -139,9 +141,10 @@ def pseudo_arclength(energy: Energy, x0: jax.Array, lam0, args: Any,
 def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, capacity: int,
                      direction) -> RawBranch:
     """Traceable core of ``pseudo_arclength`` (``capacity`` static; vmappable over direction)."""
+    model = as_model(energy)
     m = x0.shape[0]
     y0 = jnp.append(x0, lam0)
-    t0 = initial_tangent(energy, x0, lam0, args, direction)
+    t0 = initial_tangent(model, x0, lam0, args, direction)
     nan = jnp.full(capacity, jnp.nan)
     out = RawBranch(
         x=jnp.full((capacity, m), jnp.nan), lam=nan, tangent_lam=nan, min_eig=nan,
@@ -158,13 +161,14 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
             newton_iterations=out.newton_iterations.at[k].set(iters),
             residual_norm=out.residual_norm.at[k].set(res))
 
-    F0 = jnp.max(jnp.abs(_gradient(energy)(x0, lam0, args)))
-    out = record(out, 0, y0, t0, _bordered(energy, y0, t0, args)[1], 0, F0)
+    F0 = jnp.max(jnp.abs(model.gradient(x0, lam0, args)))
+    out = record(out, 0, y0, t0, model.hessian(x0, lam0, args), 0, F0)
 
     def step(s: _State) -> _State:
         y_pred = s.y + s.ds * s.t
-        res = newton(_corrector_residual, y_pred, (energy, y_pred, s.t, args), tol=opts.tol)
-        B, H = _bordered(energy, res.x, s.t, args)
+        res = newton(_corrector_residual, y_pred, (model, y_pred, s.t, args), tol=opts.tol,
+                     jacobian=_corrector_jacobian)
+        B, H = _bordered(model, res.x, s.t, args)
         t_new = jnp.linalg.solve(B, jnp.zeros_like(s.y).at[-1].set(1.0))
         t_new = t_new / jnp.sqrt(_wdot(t_new, t_new, m))
         turn_ok = _wdot(t_new, s.t, m) > 0.9

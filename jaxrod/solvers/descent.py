@@ -18,6 +18,8 @@ from typing import Any, NamedTuple
 import jax
 import jax.numpy as jnp
 
+from jaxrod.derivatives import EnergyModel
+
 
 class DescentResult(NamedTuple):
     x: jax.Array
@@ -26,11 +28,21 @@ class DescentResult(NamedTuple):
     iterations: jax.Array
 
 
-def descend(energy: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args: Any = None, *,
-            tol: float = 1e-12, max_steps: int = 500, shift: float = 1e-3) -> DescentResult:
-    """Descend ``energy(x, args)`` from x0 to a point with |grad|_inf <= tol."""
-    grad = jax.grad(energy)
-    hess = jax.hessian(energy)
+def descend(energy: Callable[[jax.Array, Any], jax.Array] | EnergyModel, x0: jax.Array,
+            args: Any = None, *, tol: float = 1e-12, max_steps: int = 500, shift: float = 1e-3,
+            lam=0.0) -> DescentResult:
+    """Descend ``energy(x, args)`` from x0 to a point with |grad|_inf <= tol.
+
+    ``energy`` may also be an ``EnergyModel`` (assembled derivatives), evaluated at ``lam``.
+    """
+    if isinstance(energy, EnergyModel):
+        model = energy
+        energy = lambda x, a: model.energy(x, lam, a)
+        grad = lambda x, a: model.gradient(x, lam, a)
+        hess = lambda x, a: model.hessian(x, lam, a)
+    else:
+        grad = jax.grad(energy)
+        hess = jax.hessian(energy)
 
     def step(state):
         x, _, k = state

@@ -8,7 +8,11 @@ dimensional kernel span{phi}. The fold is a regular solution of the extended sys
 
 in 2m + 1 unknowns (x, phi, lam), l a fixed vector with l . phi != 0 (the null-vector
 estimate from the branch). It is solved by ``jaxrod.solvers.newton`` with the exact Jacobian
-from autodiff (third derivatives of E appear through H phi).
+assembled from the energy's derivatives (``jaxrod.derivatives``),
+
+    [ H          0    F_lam         ]
+    [ D^3E[phi]  H    (H phi)_lam   ]
+    [ 0          l^T  0             ].
 
 At the fold, with phi normalised to int phi = 1 (the paper's reduced coordinate q = int x),
 the Lyapunov-Schmidt reduced function F(q, lam) of the paper has
@@ -28,9 +32,11 @@ from typing import Any, NamedTuple
 import jax
 import jax.numpy as jnp
 
+from jaxrod.derivatives import EnergyModel, as_model
 from jaxrod.solvers.newton import NewtonResult, implicit_newton, newton
 
-Energy = Callable[[jax.Array, jax.Array, Any], jax.Array]
+#: An ``EnergyModel`` (assembled derivatives) or a plain energy function E(x, lam, args).
+Energy = EnergyModel | Callable[[jax.Array, jax.Array, Any], jax.Array]
 
 
 class FoldPoint(NamedTuple):
@@ -42,25 +48,37 @@ class FoldPoint(NamedTuple):
     newton: NewtonResult
 
 
-def _hvp(energy, x, lam, args, v):
-    g = lambda z: jax.grad(energy)(z, lam, args)
-    return jax.jvp(g, (x,), (v,))[1]
-
-
 def moore_spence_residual(z, data):
     """[grad E(x, lam); H(x, lam) phi; l . phi - 1] for z = (x, phi, lam), data =
     (energy, l, args)."""
     energy, ell, args = data
+    model = as_model(energy)
     m = ell.shape[0]
     x, phi, lam = z[:m], z[m:2 * m], z[-1]
-    F = jax.grad(energy)(x, lam, args)
-    return jnp.concatenate([F, _hvp(energy, x, lam, args, phi), jnp.atleast_1d(ell @ phi - 1.0)])
+    F = model.gradient(x, lam, args)
+    H = model.hessian(x, lam, args)
+    return jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
+
+
+def moore_spence_jacobian(z, data):
+    """The exact Jacobian of ``moore_spence_residual`` in z (module docstring)."""
+    energy, ell, args = data
+    model = as_model(energy)
+    m = ell.shape[0]
+    x, phi, lam = z[:m], z[m:2 * m], z[-1]
+    H, g_lam, T, Hphi_lam = model.fold_blocks(x, lam, args, phi)
+    zero = jnp.zeros_like(H)
+    top = jnp.hstack([H, zero, g_lam[:, None]])
+    mid = jnp.hstack([T, H, Hphi_lam[:, None]])
+    bottom = jnp.concatenate([jnp.zeros(m, H.dtype), ell, jnp.zeros(1, H.dtype)])[None, :]
+    return jnp.vstack([top, mid, bottom])
 
 
 def _solve_fold(energy, x0, lam0, phi0, args, tol):
     ell = phi0 / jnp.dot(phi0, phi0)
     z0 = jnp.concatenate([x0, phi0, jnp.atleast_1d(lam0)])
-    res = newton(moore_spence_residual, z0, (energy, ell, args), tol=tol)
+    res = newton(moore_spence_residual, z0, (energy, ell, args), tol=tol,
+                 jacobian=moore_spence_jacobian)
     m = x0.shape[0]
     return FoldPoint(res.x[:m], res.x[-1], res.x[m:2 * m], res)
 
@@ -84,13 +102,15 @@ def differentiable_fold(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13
     """
     ell = jax.lax.stop_gradient(phi0 / jnp.dot(phi0, phi0))
     z0 = jnp.concatenate([x0, phi0, jnp.atleast_1d(lam0)])
-    return implicit_newton(lambda z: moore_spence_residual(z, (energy, ell, args)), z0, tol)
+    data = (energy, ell, args)
+    return implicit_newton(lambda z: moore_spence_residual(z, data), z0, tol,
+                           jacobian=lambda z: moore_spence_jacobian(z, data))
 
 
 def fold_coefficients(energy: Energy, x, lam, phi, args, mean: Callable[[jax.Array], Any]):
     """(dF/dlam, d2F/dq2, phi normalised by mean(phi) = 1) at a converged fold."""
+    model = as_model(energy)
     phi = phi / mean(phi)
-    d_lam = jax.grad(lambda l: jnp.dot(jax.grad(energy)(x, l, args), phi))(lam)
-    line = lambda e: energy(x + e * phi, lam, args)
-    d3 = jax.grad(jax.grad(jax.grad(line)))(0.0)
+    d_lam = jnp.dot(model.gradient_lam(x, lam, args), phi)
+    d3 = phi @ model.third(x, lam, args, phi) @ phi
     return d_lam, d3, phi

@@ -1,8 +1,8 @@
 """Damped Newton's method for F(x, args) = 0, as one ``lax.while_loop``.
 
-Each step solves J(x_k) dx = -F(x_k) with the exact Jacobian J = dF/dx from forward-mode
-autodiff and a dense LU solve, then backtracks x_{k+1} = x_k + t dx, t = 1, 1/2, 1/4, ...,
-until ||F(x_{k+1})|| < (1 - t/4) ||F(x_k)|| (Armijo on the residual norm). It stops when
+Each step solves J(x_k) dx = -F(x_k) with the exact Jacobian J = dF/dx (the caller's
+assembled ``jacobian``, or forward-mode autodiff of F) and a dense LU solve, then
+backtracks x_{k+1} = x_k + t dx, t = 1, 1/2, 1/4, ..., until ||F(x_{k+1})|| < (1 - t/4) ||F(x_k)|| (Armijo on the residual norm). It stops when
 
     ||F(x_k)||_inf <= tol                                  (converged), or
     a full step had ||dx||_inf <= xtol (1 + ||x||_inf)     (converged: quadratic phase), or
@@ -51,9 +51,11 @@ class NewtonResult(NamedTuple):
 
 
 class _State(NamedTuple):
-    x: jax.Array
-    fnorm: jax.Array
-    k: jax.Array
+    x: jax.Array  # the last accepted iterate
+    fnorm: jax.Array  # |F(x)|_inf
+    dx: jax.Array  # the Newton step from x
+    t: jax.Array  # the step length being tried
+    k: jax.Array  # Newton steps taken
     done: jax.Array
     status: jax.Array
 
@@ -64,11 +66,12 @@ def _norm(v):
 
 def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args: Any = None, *,
            tol: float = 1e-12, xtol: float = 1e-10, max_steps: int = 50,
-           max_halvings: int = 12, stall_xtol: float = 1e-7) -> NewtonResult:
+           max_halvings: int = 12, stall_xtol: float = 1e-7,
+           jacobian: Callable[[jax.Array, Any], jax.Array] | None = None) -> NewtonResult:
     """Solve ``residual(x, args) = 0`` from ``x0`` (square system, x a 1-D array).
 
     Args:
-      residual: pure function; its Jacobian in x is taken by ``jax.jacfwd``.
+      residual: pure function.
       x0: initial guess.
       args: PyTree of parameters passed through unchanged.
       tol: absolute tolerance on the max-norm of the residual.
@@ -77,62 +80,63 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
       max_steps, max_halvings: static iteration budgets.
       stall_xtol: a step this small (relative) that cannot reduce |F| means |F| is at its
         round-off floor: accepted as converged.
+      jacobian: ``jacobian(x, args)`` = dF/dx, exact (assembled from the problem's
+        structure); default ``jax.jacfwd`` of the residual.
+
+    The loop evaluates F at one place and the Jacobian at one other (each pass tries one
+    step length), so the compiled program holds one copy of each.
     """
     x0 = jnp.asarray(x0)
     if not jnp.issubdtype(x0.dtype, jnp.floating):
         x0 = x0.astype(jnp.float64)  # float32 input stays float32 (tolerances are the caller's)
     f = lambda x: residual(x, args)
-    jac = jax.jacfwd(f)
+    jac = jax.jacfwd(f) if jacobian is None else (lambda x: jacobian(x, args))
+    dtype = x0.dtype
+    min_t = 0.5**max_halvings
 
-    def step(state: _State) -> _State:
-        fx = f(state.x)
-        dx = jnp.linalg.solve(jac(state.x), -fx)
-
-        def try_shorter(carry):
-            t, _, _ = carry
-            t = 0.5 * t
-            return t, state.x + t * dx, _norm(f(state.x + t * dx))
-
-        def too_long(carry):
-            t, _, fn = carry
-            bad = ~(fn < (1.0 - 0.25 * t) * state.fnorm)
-            return bad & (t > 0.5**max_halvings)
-
-        x1 = state.x + dx
-        t, x1, fn1 = jax.lax.while_loop(too_long, try_shorter, (1.0, x1, _norm(f(x1))))
-        finite = jnp.all(jnp.isfinite(x1)) & jnp.isfinite(fn1)
-        accepted = fn1 < (1.0 - 0.25 * t) * state.fnorm
-        small_step = (t == 1.0) & (_norm(dx) <= xtol * (1.0 + _norm(state.x)))
+    def step(s: _State) -> _State:
+        first = s.k < 0  # the pass that evaluates F(x0)
+        trial = s.x + s.t * s.dx
+        ft = f(trial)
+        fn = _norm(ft)
+        finite = jnp.all(jnp.isfinite(trial)) & jnp.isfinite(fn)
+        accepted = jnp.where(first, finite, fn < (1.0 - 0.25 * s.t) * s.fnorm)
+        dx_small = _norm(s.dx) <= xtol * (1.0 + _norm(s.x))
         # A full step that is already at round-off level counts as converged even if the
         # residual did not decrease (it is at its floor).
-        x_new = jnp.where(accepted | small_step, x1, state.x)
-        fn_new = jnp.where(accepted | small_step, fn1, state.fnorm)
+        small_step = ~first & (s.t == 1.0) & dx_small
+        move = accepted | small_step
+        x = jnp.where(move, trial, s.x)
+        fnorm = jnp.where(move, fn, s.fnorm)
+        k = jnp.where(move, s.k + 1, s.k)
+        converged_here = move & ((fn <= tol) | small_step)
         # No step length reduces |F| although the Newton step is tiny: the residual sits at
         # its round-off floor (|F| cannot be evaluated more accurately), so x is as accurate
         # as the arithmetic allows.
-        at_floor = ~accepted & (_norm(dx) <= stall_xtol * (1.0 + _norm(state.x)))
-        converged = (fn_new <= tol) | small_step | at_floor
-        status = jnp.where(~finite, NONFINITE,
-                           jnp.where(converged, CONVERGED,
-                                     jnp.where(accepted, MAX_STEPS, LINE_SEARCH_FAILED)))
-        done = converged | ~finite | ~(accepted | small_step)
-        return _State(x_new, fn_new, state.k + 1, done, status)
+        exhausted = ~first & ~move & (s.t <= min_t)
+        at_floor = exhausted & (_norm(s.dx) <= stall_xtol * (1.0 + _norm(s.x)))
+        new_direction = move & ~converged_here & (k < max_steps)
+        dx = jax.lax.cond(new_direction, lambda: jnp.linalg.solve(jac(x), -ft),
+                          lambda: s.dx)
+        bad_direction = new_direction & ~jnp.all(jnp.isfinite(dx))
+        status = jnp.where(
+            converged_here | at_floor, CONVERGED,
+            jnp.where((first & ~finite) | bad_direction | (exhausted & ~finite), NONFINITE,
+                      jnp.where(exhausted, LINE_SEARCH_FAILED, MAX_STEPS)))
+        done = converged_here | at_floor | exhausted | bad_direction | (first & ~finite) \
+            | (move & (k >= max_steps))
+        t = jnp.where(move, jnp.ones((), dtype), 0.5 * s.t)
+        return _State(x, fnorm, dx, t, k, done, status)
 
-    def keep_going(state: _State):
-        return (~state.done) & (state.k < max_steps)
-
-    fn0 = _norm(f(x0))
-    init = _State(x0, fn0, jnp.asarray(0), fn0 <= tol,
-                  jnp.where(jnp.isfinite(fn0), jnp.where(fn0 <= tol, CONVERGED, MAX_STEPS),
-                            NONFINITE))
-    init = init._replace(done=init.done | ~jnp.isfinite(fn0))
-    final = jax.lax.while_loop(keep_going, step, init)
+    init = _State(x0, jnp.asarray(jnp.inf, dtype), jnp.zeros_like(x0), jnp.zeros((), dtype),
+                  jnp.asarray(-1), jnp.asarray(False), jnp.asarray(MAX_STEPS))
+    final = jax.lax.while_loop(lambda s: ~s.done, step, init)
     converged = final.status == CONVERGED
-    return NewtonResult(final.x, converged, final.fnorm, final.k, final.status)
+    return NewtonResult(final.x, converged, final.fnorm, jnp.maximum(final.k, 0), final.status)
 
 
 def implicit_newton(residual: Callable[[jax.Array], jax.Array], x0: jax.Array,
-                    tol: float = 1e-13):
+                    tol: float = 1e-13, jacobian: Callable[[jax.Array], jax.Array] | None = None):
     """(x, stats): a root of ``residual`` by ``newton`` from x0, differentiable by the
     implicit function theorem (``lax.custom_root``).
 
@@ -141,11 +145,13 @@ def implicit_newton(residual: Callable[[jax.Array], jax.Array], x0: jax.Array,
     dx = -(dR/dx)^-1 (dR/dp) dp, so Newton's iterations are never differentiated and the
     starting point carries no gradient. ``stats`` = (converged as 0/1, residual norm,
     iterations) as a float array (custom_root's tangent rule cannot carry integer outputs).
-    Under ``vmap`` each batch element gets its own solve.
+    Under ``vmap`` each batch element gets its own solve. ``jacobian(x)``, if given, is the
+    exact dR/dx that Newton uses (the tangent solve linearises ``residual`` itself).
     """
+    jac = None if jacobian is None else (lambda z, _: jacobian(z))
 
     def solve(f, z_init):
-        res = newton(lambda z, _: f(z), z_init, None, tol=tol)
+        res = newton(lambda z, _: f(z), z_init, None, tol=tol, jacobian=jac)
         return res.x, jnp.stack([res.converged.astype(z_init.dtype), res.residual_norm,
                                  res.iterations.astype(z_init.dtype)])
 

@@ -1,0 +1,82 @@
+"""Public entry points compile once: a second and third call with new parameter values (same
+N, same shapes) compile nothing. Compilations are counted with JAX's own monitoring events
+(one '/jax/core/compile/backend_compile_duration' event per XLA compilation)."""
+
+import contextlib
+
+import jax
+import numpy as np
+import pytest
+from jax import monitoring
+
+from jaxrod.analysis import fit, greenhill, magnet
+from jaxrod.analysis.batch import fold_pairs
+
+_count = [0]
+_listening = [False]
+
+
+def _listener(name, duration, **kwargs):
+    if _listening[0] and "backend_compile" in name:
+        _count[0] += 1
+
+
+monitoring.register_event_duration_secs_listener(_listener)
+
+
+@contextlib.contextmanager
+def compilations():
+    """Counts XLA compilations inside the block: ``with compilations() as c: ...; c[0]``."""
+    _count[0] = 0
+    _listening[0] = True
+    try:
+        yield _count
+    finally:
+        _listening[0] = False
+
+
+D_EXP = 11.25 / 9.2
+# (G, M) pairs of the paper's wire at E = 200, 180, 160 GPa
+VALUES = [(2.2 * 200 / E, 0.0236 * 200 / E) for E in (200.0, 180.0, 160.0)]
+
+
+def _recompiles(call) -> list[int]:
+    """Compilations of each call after the first, each with new values."""
+    call(*VALUES[0])
+    counts = []
+    for values in VALUES[1:]:
+        with compilations() as c:
+            call(*values)
+        counts.append(c[0])
+    return counts
+
+
+def test_counter_sees_a_compilation():
+    f = jax.jit(lambda x: x * 3.0 + 1.0)
+    with compilations() as c:
+        f(np.arange(7.0))
+    assert c[0] >= 1
+
+
+@pytest.mark.parametrize("name, call", [
+    ("fold_angles", lambda G, M: magnet.fold_angles(G, M, D_EXP)),
+    ("grad fold_angles", lambda G, M: jax.grad(lambda g: magnet.fold_angles(g, M, D_EXP)[0][1])(G)),
+    ("fold_pair", lambda G, M: magnet.fold_pair(magnet.make_scene(G, M, D_EXP))),
+    ("locate_folds", lambda G, M: magnet.locate_folds(magnet.make_scene(G, M, D_EXP), n=12)),
+    ("fold_pairs", lambda G, M: fold_pairs(np.array([G, 1.1 * G]), np.array([M, M]),
+                                           np.full(2, D_EXP))),
+    ("greenhill", lambda G, M: greenhill.greenhill(4.0 * G, "clamped", A=300.0 * M)),
+    ("hysteresis_sweep", lambda G, M: magnet.hysteresis_sweep(
+        magnet.make_scene(G, M, D_EXP), n=12, alpha_max_deg=10.0, step_deg=2.0)),
+])
+def test_no_recompilation_for_new_values(name, call):
+    assert _recompiles(call) == [0, 0], name
+
+
+def test_fit_does_not_recompile():
+    angles = [[-25.0, 38.0, 24.0, -42.0], [-26.0, 37.0, 25.0, -41.0], [-24.0, 39.0, 23.0, -43.0]]
+    fit.fit_youngs_modulus(angles[0], 1.0, True)
+    for a in angles[1:]:
+        with compilations() as c:
+            fit.fit_youngs_modulus(a, 1.0, True)
+        assert c[0] == 0

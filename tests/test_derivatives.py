@@ -1,0 +1,118 @@
+"""Assembled derivatives (``jaxrod.derivatives.Structured``) against plain autodiff of each
+scene's whole energy (``scene.energy``, built from the energy terms): energy, gradient,
+Hessian, D^3E[phi], and the parameter derivatives, to round-off."""
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrod.derivatives import Autodiff, Structured
+from jaxrod.discretise.director import director_discretisation
+from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.scenes import DipoleMagnet, UniformField
+from jaxrod.scenes.dipole import ALPHA_MODEL
+from jaxrod.scenes.three_d import DipoleMagnet3D, UniformField3D, magnet_position
+from jaxrod.solvers.folds import moore_spence_jacobian, moore_spence_residual
+
+D_EXP = 11.25 / 9.2
+
+
+def _uniform_at(A, args):
+    G, disc = args
+    return UniformField(G, A), disc
+
+
+def _uniform3_at(A, args):
+    G, disc = args
+    return UniformField3D(G, A), disc
+
+
+def _magnet3_at(alpha, args):
+    disc, = args
+    return DipoleMagnet3D(2.2, 0.0236, D_EXP, magnet_position(alpha, 0.3)), disc
+
+
+def _magnet_energy(x, alpha, args):
+    scene, disc = args
+    return scene.with_alpha(alpha).energy(x, disc)
+
+
+_REFERENCES = {}
+
+
+def _reference(scene_at):
+    """Autodiff of ``scene.energy`` (one object per scene_at, so the jit cache is reused)."""
+    if scene_at in _REFERENCES:
+        return _REFERENCES[scene_at]
+    def energy(x, lam, args):
+        scene, disc = scene_at(lam, args)
+        return scene.energy(x, disc)
+    _REFERENCES[scene_at] = Autodiff(energy)
+    return _REFERENCES[scene_at]
+
+
+CASES = {
+    "magnet planar": (ALPHA_MODEL, (DipoleMagnet(2.2, 0.0236, D_EXP, 0.0),
+                                    planar_discretisation(12)), 0.6),
+    "uniform clamped": (Structured(_uniform_at), (10.0, planar_discretisation(16)), 3.0),
+    "uniform pinned": (Structured(_uniform_at), (10.0, planar_discretisation(16, "pinned")), 3.0),
+    "uniform 3D": (Structured(_uniform3_at), (5.0, director_discretisation(10)), 2.0),
+    "magnet 3D": (Structured(_magnet3_at), (director_discretisation(10),), 0.5),
+}
+
+
+def _state(size, scale, shift=0.0):
+    return scale * jnp.sin(1.3 * jnp.arange(size) + shift)
+
+
+def _relative(a, b):
+    return float(jnp.max(jnp.abs(a - b)) / (1.0 + jnp.max(jnp.abs(b))))
+
+
+@functools.partial(jax.jit, static_argnums=(0, 1))
+def _both(model, reference, x, phi, lam, args):
+    """Each quantity assembled and by plain autodiff of the whole energy, in one program."""
+    E = reference.fn
+    hess = lambda z, l: jax.hessian(E)(z, l, args)
+    H, g_lam, T, Hphi_lam = model.fold_blocks(x, lam, args, phi)
+    return {
+        "energy": (model.energy(x, lam, args), E(x, lam, args)),
+        "gradient": (model.gradient(x, lam, args), jax.grad(E)(x, lam, args)),
+        "hessian": (model.hessian(x, lam, args), hess(x, lam)),
+        "third": (model.third(x, lam, args, phi), jax.jacfwd(lambda z: hess(z, lam) @ phi)(x)),
+        "fold hessian": (H, hess(x, lam)),
+        "fold third": (T, jax.jacfwd(lambda z: hess(z, lam) @ phi)(x)),
+        "gradient_lam": (g_lam, jax.jacfwd(jax.grad(E), 1)(x, lam, args)),
+        "hessian_vector_lam": (Hphi_lam, jax.jacfwd(lambda l: hess(x, l) @ phi)(lam)),
+    }
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_assembled_derivatives_match_autodiff(name):
+    model, args, lam = CASES[name]
+    if name == "magnet planar":
+        reference = Autodiff(_magnet_energy)
+    else:
+        reference = _reference(model.scene_at)
+    size = args[-1].size
+    phi = _state(size, 1.0, 0.4)
+    for scale in (0.0, 0.3):
+        out = _both(model, reference, _state(size, scale), phi, jnp.asarray(lam), args)
+        for quantity, (assembled, autodiff) in out.items():
+            error = _relative(assembled, autodiff)
+            assert error < (1e-12 if "third" in quantity else 1e-13), (quantity, scale, error)
+
+
+def test_moore_spence_jacobian_is_the_residuals_jacobian():
+    model, args, lam = CASES["magnet planar"]
+    m = args[1].size
+    z = jnp.concatenate([_state(m, 0.3), _state(m, 1.0, 0.4), jnp.array([lam])])
+    data = (model, _state(m, 1.0, 0.9), args)
+    both = jax.jit(lambda z, ell, args: (
+        moore_spence_jacobian(z, (model, ell, args)),
+        jax.jacfwd(moore_spence_residual)(z, (Autodiff(_magnet_energy), ell, args))))
+    assembled, autodiff = both(z, data[1], args)
+    np.testing.assert_allclose(assembled, autodiff, atol=1e-12)
