@@ -111,6 +111,9 @@ def run(quick: bool, auto: bool) -> dict:
                 rows.append(r)
                 print(json.dumps(r), flush=True)
     cli = {}
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", "import jax"], check=True, timeout=300)
+    cli["import_jax_process_s"] = time.perf_counter() - t0
     with tempfile.TemporaryDirectory() as cache:
         argv = ["folds", *MAGNET, "--json"]
         cli["folds_no_cache_s"] = cli_process(argv, {"JAXROD_NO_CACHE": "1"})
@@ -143,7 +146,10 @@ def markdown(res: dict, device: str) -> str:
               "the diagram):", "",
               f"- no persistent cache: {c['folds_no_cache_s']:.2f} s",
               f"- empty cache (first run): {c['folds_cache_cold_s']:.2f} s",
-              f"- cache filled (every later run): {c['folds_cache_warm_s']:.2f} s"]
+              f"- cache filled (every later run): {c['folds_cache_warm_s']:.2f} s",
+              f"- the floor, a bare `python -c \"import jax\"` in the same run: "
+              f"{c['import_jax_process_s']:.2f} s (warm cache / floor: "
+              f"{c['folds_cache_warm_s'] / c['import_jax_process_s']:.1f}x)"]
     if c.get("auto07p_process_s"):
         lines += [f"- AUTO-07p whole `python run.py` session ({c['auto07p_mesh']}): "
                   f"{c['auto07p_process_s']:.2f} s (first, compiling the equations: "

@@ -104,10 +104,12 @@ def _fit_core(measured, mask, sigma, fit_offset, setup: FitSetup, log_e0, max_it
     p0 = jnp.array([log_e0, 0.0])
     p, _, k, _ = jax.lax.while_loop(go_on, step, (p0, opt.init(p0), 0, jnp.inf))
     p = p.at[1].multiply(offset_free)
-    _, grad = jax.value_and_grad(loss)(p)
-    r, ok = _residuals(p, measured, mask, sigma, setup)
-    J = jax.jacfwd(lambda q: _residuals(q, measured, mask, sigma, setup)[0])(p)
+    # one evaluation of the model at the optimum gives residuals, Jacobian and gradient
+    # (grad 0.5 |r|^2 = J^T r): every model call site is compiled separately
+    J, (r, ok) = jax.jacfwd(lambda q: (lambda out: (out[0], out))(
+        _residuals(q, measured, mask, sigma, setup)), has_aux=True)(p)
     J = J.at[:, 1].multiply(offset_free)
+    grad = J.T @ r
     JTJ = J.T @ J + jnp.diag(jnp.array([0.0, 1.0]) * (1.0 - offset_free))
     cov = jnp.linalg.inv(JTJ)
     return p, r * sigma, jnp.sqrt(cov[0, 0]), jnp.sqrt(cov[1, 1]) * offset_free, ok, k, \

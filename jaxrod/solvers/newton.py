@@ -2,7 +2,8 @@
 
 Each step solves J(x_k) dx = -F(x_k) with the exact Jacobian J = dF/dx (the caller's
 assembled ``jacobian``, or forward-mode autodiff of F) and a dense LU solve, then
-backtracks x_{k+1} = x_k + t dx, t = 1, 1/2, 1/4, ..., until ||F(x_{k+1})|| < (1 - t/4) ||F(x_k)|| (Armijo on the residual norm). It stops when
+backtracks x_{k+1} = x_k + t dx, t = 1, 1/2, 1/4, ..., until
+||F(x_{k+1})|| < (1 - t/4) ||F(x_k)|| (Armijo on the residual norm). It stops when
 
     ||F(x_k)||_inf <= tol                                  (converged), or
     a full step had ||dx||_inf <= xtol (1 + ||x||_inf)     (converged: quadratic phase), or
