@@ -33,7 +33,7 @@ import jax.numpy as jnp
 from jaxrod.analysis.reduction import normalised_mode
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, dipole_potential, magnet_direction
-from jaxrod.solvers.folds import moore_spence_jacobian, moore_spence_residual
+from jaxrod.solvers.folds import moore_spence_linearisation
 from jaxrod.solvers.newton import newton
 
 #: The (q, alpha) grid that brackets the one-mode folds: q in [0, Q_MAX], alpha in [0, 90] deg.
@@ -83,9 +83,22 @@ def _sign_change(X):
     return (jnp.min(corners, 0) < 0) & (jnp.max(corners, 0) > 0)
 
 
-def fold_pair_one(G, M, D, disc: PlanarDiscretisation):
-    """(alpha_lower, alpha_upper) in radians, converged, Newton iterations (one parameter set;
-    vmap it). The dtype of ``disc`` (float64 or float32) sets the precision."""
+def _canonical(z, m):
+    """The fold state z = (x, phi, alpha) mapped to alpha in [0, pi]: the energy is
+    2 pi-periodic in alpha and symmetric under (theta, alpha) -> -(theta, alpha) (with the
+    same Hessian), so a solve that lands on a fold's periodic or mirror image has found that
+    fold."""
+    alpha = jnp.mod(z[-1] + jnp.pi, 2.0 * jnp.pi) - jnp.pi
+    sign = jnp.where(alpha < 0.0, -1.0, 1.0).astype(z.dtype)
+    return jnp.concatenate([sign * z[:m], z[m:2 * m], jnp.atleast_1d(sign * alpha)])
+
+
+def fold_pair_states(G, M, D, disc: PlanarDiscretisation):
+    """The two Moore-Spence fold states z = (theta, phi, alpha) (2, 2m + 1), lower fold
+    first, reached from the one-mode brackets (module docstring), with converged and the
+    Moore-Spence iteration count (one parameter set; vmap it). The dtype of ``disc``
+    (float64 or float32) sets the precision. A state is a warm start for the same fold at
+    nearby parameters (``jaxrod.analysis.fit``)."""
     dtype = disc.quad_weights.dtype
     tol, xtol, stall = TOLERANCES[jnp.dtype(dtype)]
     scene = DipoleMagnet(G, M, D, jnp.zeros((), dtype))
@@ -117,16 +130,23 @@ def fold_pair_one(G, M, D, disc: PlanarDiscretisation):
     def moore_spence(x):
         ell = psi / jnp.dot(psi, psi)
         z0 = jnp.concatenate([x[0] * psi, psi, x[1:2]])
-        return newton(moore_spence_residual, z0, (ALPHA_MODEL, ell, (scene, disc)), tol=tol,
-                      xtol=xtol, stall_xtol=stall, max_steps=20, jacobian=moore_spence_jacobian)
+        return newton(None, z0, (ALPHA_MODEL, ell, (scene, disc)), tol=tol, xtol=xtol,
+                      stall_xtol=stall, max_steps=20, linearise=moore_spence_linearisation)
 
     ms = jax.vmap(moore_spence)(one.x)
-    # the energy is 2 pi-periodic in alpha and symmetric under (theta, alpha) -> -(theta,
-    # alpha): a solve that lands on a fold's periodic or mirror image has found that fold
-    alphas = jnp.sort(jnp.abs(jnp.mod(ms.x[:, -1] + jnp.pi, 2.0 * jnp.pi) - jnp.pi))
+    z = jax.vmap(lambda z: _canonical(z, disc.size))(ms.x)
+    z = z[jnp.argsort(z[:, -1])]
+    alphas = z[:, -1]
     in_range = jnp.all((alphas > 0.0) & (alphas <= 0.5 * jnp.pi))
     converged = found & jnp.all(ms.converged) & in_range & (alphas[1] - alphas[0] > 1e3 * xtol)
-    return alphas, converged, jnp.max(ms.iterations)
+    return z, converged, jnp.max(ms.iterations)
+
+
+def fold_pair_one(G, M, D, disc: PlanarDiscretisation):
+    """(alpha_lower, alpha_upper) in radians, converged, Moore-Spence iterations (one
+    parameter set; vmap it): the angles of ``fold_pair_states``."""
+    z, converged, iterations = fold_pair_states(G, M, D, disc)
+    return z[:, -1], converged, iterations
 
 
 def cast(disc: PlanarDiscretisation, dtype) -> PlanarDiscretisation:

@@ -16,10 +16,22 @@ offset delta of the angular scale (a misaligned track):
 
 With E the only material unknown, G and M scale as 1/E (``gravity_group``,
 ``magnet_group``) and D does not depend on E. The fit minimises
-0.5 sum_i ((model_i - measured_i) / sigma)^2 over p = (log E, delta) with optax's L-BFGS
-(log E keeps E positive); gradients come from implicit differentiation of the Moore-Spence
-systems. The standard deviation of E follows from the Gauss-Newton covariance
-(J^T J)^-1 of the residuals r_i / sigma at the optimum: std(E) = E std(log E).
+0.5 sum_i ((model_i - measured_i) / sigma)^2 over p = (log E, delta) (log E keeps E
+positive) with optax's L-BFGS direction (``optax.scale_by_lbfgs``) and a backtracking line
+search on the sufficient decrease (Armijo) condition, in scaled coordinates
+p = p0 + P u with P = (J0^T J0)^(-1/2) from the first Jacobian, so that the first direction
+is the Gauss-Newton step.
+
+The fold model tracks the folds: the folds at the starting modulus come from the one-mode
+brackets and Moore-Spence (``jaxrod.analysis.batch.fold_pair_states``, no continuation), and
+every later evaluation solves each fold's Moore-Spence system from the folds of the last
+accepted point (``tracked_angles``; the folds move smoothly with E). Residuals, their
+Jacobian and the gradient J^T r come from one forward-mode pass at one place in the loop
+(implicit differentiation of the Moore-Spence systems), and a trial point where a solve
+fails is rejected by the line search. The standard deviation of E follows from the
+Gauss-Newton covariance (J^T J)^-1 of the residuals r_i / sigma at the optimum:
+std(E) = E std(log E). ``model_angles`` (a continuation from the straight rod per call) is
+the independent reference the tests build synthetic data with.
 """
 
 from __future__ import annotations
@@ -27,14 +39,19 @@ from __future__ import annotations
 import dataclasses
 import math
 import sys
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optax
 
+from jaxrod.analysis.batch import fold_pair_states
 from jaxrod.analysis.magnet import fold_angles
+from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import NDFEB_MAGNET, ParameterError, preset
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
+from jaxrod.solvers.folds import differentiable_fold
 
 ANGLE_NAMES = ("cw_capture", "cw_release", "ccw_capture", "ccw_release")
 _SIGNS = jnp.array([-1.0, 1.0, 1.0, -1.0])  # fold angle sign per measured angle
@@ -71,49 +88,124 @@ class FitResult(dict):
     converged, iterations, reduced_chi2, reason (why not converged), warning (poor fit)."""
 
 
-def _residuals(params, measured, mask, sigma, setup):
-    model, ok = model_angles(params, setup)
-    r = jnp.where(mask, (model - jnp.where(mask, measured, 0.0)) / sigma, 0.0)
-    return r, ok
+#: Moore-Spence discretisation of the fit's fold model (N = 12 reaches the round-off floor
+#: of the fold angles at the experiment's parameters).
+FIT_N = 12
+
+
+def _scene(log_e, setup: FitSetup):
+    scale = setup.E_ref / jnp.exp(log_e)
+    return DipoleMagnet(setup.G_ref * scale, setup.M_ref * scale, setup.D, 0.0)
+
+
+def tracked_angles(params, z, setup: FitSetup, disc: PlanarDiscretisation):
+    """The four switching angles (degrees) at p = (log E, delta_deg) from fold states z
+    (2, 2m + 1) at nearby parameters: each fold is its Moore-Spence solution from z
+    (``differentiable_fold``, implicitly differentiated). Returns (angles, (z_new, ok));
+    ok is False when a solve fails or the folds leave 0 < lower < upper <= 90 degrees."""
+    args = (_scene(params[0], setup), disc)
+    m = disc.size
+    z_new, stats = jax.vmap(lambda zi: differentiable_fold(
+        ALPHA_MODEL, zi[:m], zi[-1], zi[m:2 * m], args))(z)
+    alphas = z_new[:, -1]
+    ok = jnp.all(stats[:, 0] == 1.0) & (alphas[0] > 0.0) & (alphas[1] - alphas[0] > 1e-9) \
+        & (alphas[1] <= 0.5 * jnp.pi)
+    return _SIGNS * jnp.degrees(alphas[_FOLD]) + params[1], (z_new, ok)
+
+
+class _Search(NamedTuple):
+    """The fit's loop state: u the accepted point in scaled coordinates p = p0 + P u, the
+    fold states z there, the loss, its u-gradient, the residuals and their p-Jacobian, the
+    L-BFGS state and direction, the step length t being tried, and counters."""
+
+    u: jax.Array
+    z: jax.Array
+    value: jax.Array
+    grad_u: jax.Array
+    r: jax.Array
+    J: jax.Array
+    ok: jax.Array
+    opt_state: Any
+    direction: jax.Array
+    t: jax.Array
+    P: jax.Array
+    k: jax.Array
+    evals: jax.Array
+    done: jax.Array
+
+
+def _inverse_sqrt(A):
+    lam, V = jnp.linalg.eigh(A)
+    return (V / jnp.sqrt(jnp.maximum(lam, 1e-12 * jnp.max(lam) + 1e-300))) @ V.T
 
 
 def _fit_core(measured, mask, sigma, fit_offset, setup: FitSetup, log_e0, max_iter: int = 40,
               gtol: float = 1e-9):
+    """Minimise 0.5 |r(p)|^2 with optax's L-BFGS direction and a backtracking (Armijo) line
+    search; the fold model is evaluated at one place per pass, from the fold states of the
+    last accepted point (module docstring)."""
     offset_free = jnp.asarray(fit_offset, jnp.float64)
-
-    def loss(p):
-        p = p.at[1].multiply(offset_free)
-        r, ok = _residuals(p, measured, mask, sigma, setup)
-        out_of_range = (p[0] < LOG_E_RANGE[0]) | (p[0] > LOG_E_RANGE[1])
-        return jnp.where(ok & ~out_of_range, 0.5 * jnp.sum(r**2), 1e8)
-
-    opt = optax.lbfgs()  # zoom line search (strong Wolfe)
-    value_and_grad = optax.value_and_grad_from_state(loss)
-
-    def step(carry):
-        p, state, k, _ = carry
-        value, grad = value_and_grad(p, state=state)
-        updates, state = opt.update(grad, state, p, value=value, grad=grad, value_fn=loss)
-        p = optax.apply_updates(p, updates)
-        return p, state, k + 1, jnp.max(jnp.abs(grad))
-
-    def go_on(carry):
-        _, _, k, gnorm = carry
-        return (k < max_iter) & (gnorm > gtol)
-
+    columns = jnp.array([1.0, 0.0]) + jnp.array([0.0, 1.0]) * offset_free
+    fixed = jnp.diag(jnp.array([0.0, 1.0]) * (1.0 - offset_free))
+    disc = planar_discretisation(FIT_N, "clamped")
+    start = _scene(jnp.asarray(log_e0, jnp.float64), setup)
+    z0, found, _ = fold_pair_states(start.G, start.M, start.D, disc)
     p0 = jnp.array([log_e0, 0.0])
-    p, _, k, _ = jax.lax.while_loop(go_on, step, (p0, opt.init(p0), 0, jnp.inf))
-    p = p.at[1].multiply(offset_free)
-    # one evaluation of the model at the optimum gives residuals, Jacobian and gradient
-    # (grad 0.5 |r|^2 = J^T r): every model call site is compiled separately
-    J, (r, ok) = jax.jacfwd(lambda q: (lambda out: (out[0], out))(
-        _residuals(q, measured, mask, sigma, setup)), has_aux=True)(p)
-    J = J.at[:, 1].multiply(offset_free)
-    grad = J.T @ r
-    JTJ = J.T @ J + jnp.diag(jnp.array([0.0, 1.0]) * (1.0 - offset_free))
-    cov = jnp.linalg.inv(JTJ)
-    return p, r * sigma, jnp.sqrt(cov[0, 0]), jnp.sqrt(cov[1, 1]) * offset_free, ok, k, \
-        jnp.max(jnp.abs(grad))
+    target = jnp.where(mask, measured, 0.0)
+
+    def evaluate(p, z):
+        def residuals(q):
+            model, (z_new, ok) = tracked_angles(q, z, setup, disc)
+            r = jnp.where(mask, (model - target) / sigma, 0.0)
+            return r, (r, z_new, ok)
+
+        J, (r, z_new, ok) = jax.jacfwd(residuals, has_aux=True)(p)
+        return r, J * columns, z_new, ok
+
+    opt = optax.scale_by_lbfgs(scale_init_precond=False)  # in u: unit initial preconditioner
+
+    def step(s: _Search) -> _Search:
+        first = s.evals == 0
+        u = s.u + s.t * s.direction
+        p = p0 + s.P @ u
+        r, J, z, ok = evaluate(p, s.z)
+        in_range = (p[0] > LOG_E_RANGE[0]) & (p[0] < LOG_E_RANGE[1])
+        good = ok & in_range & jnp.all(jnp.isfinite(r)) & jnp.all(jnp.isfinite(J))
+        value = jnp.where(good, 0.5 * jnp.dot(r, r), jnp.inf)
+        # scaled coordinates from the first Gauss-Newton metric: J^T J ~ identity in u
+        P = jnp.where(first, _inverse_sqrt(J.T @ J + fixed), s.P)
+        grad_u = P.T @ (J.T @ r)
+        armijo = value <= s.value + 1e-4 * s.t * jnp.dot(s.grad_u, s.direction)
+        # at the loss's round-off floor a decrease cannot be seen: a smaller gradient decides
+        at_floor = (jnp.abs(value - s.value) <= 64.0 * jnp.finfo(r.dtype).eps * s.value) \
+            & (jnp.max(jnp.abs(grad_u)) < jnp.max(jnp.abs(s.grad_u)))
+        accept = good & (first | armijo | at_floor)
+        update, opt_state = opt.update(grad_u, s.opt_state, u)
+        direction = jnp.where(jnp.dot(update, grad_u) > 0.0, -update, -grad_u)
+        pick = lambda new, old: jax.tree_util.tree_map(
+            lambda a, b: jnp.where(accept, a, b), new, old)
+        u, z, value, grad_u, r, J, ok, opt_state, direction = pick(
+            (u, z, value, grad_u, r, J, ok, opt_state, direction),
+            (s.u, s.z, s.value, s.grad_u, s.r, s.J, s.ok, s.opt_state, s.direction))
+        k = s.k + (accept & ~first)
+        converged = accept & (jnp.max(jnp.abs(J.T @ r)) <= gtol)
+        stalled = ~accept & (s.t < 1e-10)
+        done = converged | stalled | (first & ~good) | (k >= max_iter) \
+            | (s.evals + 1 >= 4 * max_iter)
+        t = jnp.where(accept, 1.0, 0.5 * s.t)
+        return _Search(u, z, value, grad_u, r, J, ok, opt_state, direction, t, P, k,
+                       s.evals + 1, done)
+
+    zero = jnp.zeros(2)
+    init = _Search(zero, z0, jnp.inf, zero, jnp.zeros(4), jnp.zeros((4, 2)), found,
+                   opt.init(zero), zero, jnp.zeros(()), jnp.eye(2), jnp.asarray(0),
+                   jnp.asarray(0), ~found)
+    s = jax.lax.while_loop(lambda s: ~s.done, step, init)
+    p = p0 + s.P @ s.u
+    # residuals, Jacobian and gradient (J^T r) at the optimum from its accepted evaluation
+    cov = jnp.linalg.inv(s.J.T @ s.J + fixed)
+    return p, s.r * sigma, jnp.sqrt(cov[0, 0]), jnp.sqrt(cov[1, 1]) * offset_free, \
+        s.ok & found, s.k, jnp.max(jnp.abs(s.J.T @ s.r))
 
 
 _fit_jit = jax.jit(_fit_core, static_argnames=("max_iter",))

@@ -147,17 +147,19 @@ def correction(q, alpha, red: Reduction, scene: DipoleMagnet, disc: PlanarDiscre
     the scene) by implicit differentiation (``implicit_newton``: one solve with the
     coercive matrix Z^T H Z per tangent).
     """
-    Z = red.Z
+    def projected(y, p):
+        q, alpha, red, scene, disc = p
+        return red.Z.T @ _gradient(q * red.psi + red.Z @ y, alpha, scene, disc)
 
-    def projected(y):
-        return Z.T @ _gradient(q * red.psi + Z @ y, alpha, scene, disc)
+    def projected_linearisation(y, p):
+        q, alpha, red, scene, disc = p
+        H = ALPHA_MODEL.hessian(q * red.psi + red.Z @ y, alpha, (scene, disc))
+        return projected(y, p), red.Z.T @ H @ red.Z
 
-    def projected_jacobian(y):
-        return Z.T @ ALPHA_MODEL.hessian(q * red.psi + Z @ y, alpha, (scene, disc)) @ Z
-
-    y0 = jnp.zeros(Z.shape[1], dtype=red.psi.dtype)
-    y, stats = implicit_newton(projected, y0, tol, jacobian=projected_jacobian)
-    return Z @ y, stats
+    y0 = jnp.zeros(red.Z.shape[1], dtype=red.psi.dtype)
+    y, stats = implicit_newton(projected, y0, (q, alpha, red, scene, disc), tol,
+                               linearise=projected_linearisation)
+    return red.Z @ y, stats
 
 
 def reduced_state(q, alpha, red, scene, disc):
@@ -173,12 +175,58 @@ def reduced_function(q, alpha, red: Reduction, scene: DipoleMagnet,
     return jnp.dot(_gradient(theta, alpha, scene, disc), red.psi)
 
 
+def _jet(theta, xi, theta_alpha, alpha, red: Reduction, scene, disc):
+    """(F, dF/dq, dF/dalpha, d2F/dq2, d2F/dq dalpha) at theta = theta(q, alpha), given its
+    q- and alpha-derivatives xi and theta_alpha with Z^T H xi = 0 (xi - psi in Y):
+
+        F = psi . g,   F_q = xi^T H xi,   F_alpha = psi . (H theta_alpha + g_alpha),
+        F_qq = D^3E[xi, xi, xi],   F_q alpha = D^3E[xi, xi, theta_alpha] + xi . (H xi)_alpha,
+
+    with g = grad E, H = Hess E. The terms with d_q xi and d_alpha xi drop out because they
+    lie in Y and H xi is orthogonal to Y (one assembly of the Hessian, two tangents of it)."""
+    args = (scene, disc)
+    g = ALPHA_MODEL.gradient(theta, alpha, args)
+    H, g_alpha, T, Hxi_alpha = ALPHA_MODEL.fold_blocks(theta, alpha, args, xi)
+    Txi = T @ xi
+    return jnp.stack([jnp.dot(red.psi, g), xi @ H @ xi,
+                      jnp.dot(red.psi, H @ theta_alpha + g_alpha), jnp.dot(Txi, xi),
+                      jnp.dot(Txi, theta_alpha) + jnp.dot(xi, Hxi_alpha)])
+
+
+def _state_derivatives(theta, alpha, red: Reduction, scene, disc):
+    """(xi, theta_alpha) = (d theta/dq, d theta/dalpha) on the w-manifold Z^T g = 0:
+    xi = psi - Z A^-1 Z^T H psi and theta_alpha = -Z A^-1 Z^T g_alpha, A = Z^T H Z
+    (coercive on Y, so a Cholesky solve)."""
+    H, g_alpha = ALPHA_MODEL.hessian_and_gradient_lam(theta, alpha, (scene, disc))
+    Z = red.Z
+    factor = jax.scipy.linalg.cho_factor(Z.T @ H @ Z)
+    y = jax.scipy.linalg.cho_solve(factor, Z.T @ jnp.stack([H @ red.psi, g_alpha], axis=1))
+    dtheta = -Z @ y
+    return red.psi + dtheta[:, 0], dtheta[:, 1]
+
+
+def reduced_jet(q, alpha, red: Reduction, scene, disc):
+    """(F, dF/dq, dF/dalpha, d2F/dq2, d2F/dq dalpha) at (q, alpha), in closed form from the
+    energy's assembled derivatives at theta = q psi + w(q, alpha) (``_jet``), theta, and
+    the inner w-solve's statistics."""
+    theta, stats = reduced_state(q, alpha, red, scene, disc)
+    xi, theta_alpha = _state_derivatives(theta, alpha, red, scene, disc)
+    return _jet(theta, xi, theta_alpha, alpha, red, scene, disc), theta, stats
+
+
+def one_mode_jet(q, alpha, red: Reduction, scene, disc):
+    """(F0, dF0/dq, dF0/dalpha, d2F0/dq2, d2F0/dq dalpha) of the one-mode function
+    F0(q, alpha) = dE[q psi](psi): ``_jet`` with xi = psi, theta_alpha = 0."""
+    return _jet(q * red.psi, red.psi, jnp.zeros_like(red.psi), alpha, red, scene, disc)
+
+
+JET_NAMES = ("F", "dF_dq", "dF_dalpha", "d2F_dq2", "d2F_dq_dalpha")
+
+
 def reduced_derivatives(q, alpha, red, scene, disc) -> dict:
-    """F and dF/dq, dF/dalpha, d2F/dq2, d2F/dq dalpha by autodiff through the w-solve."""
-    F = lambda q, a: reduced_function(q, a, red, scene, disc)
-    Fq = jax.grad(F, 0)
-    return {"F": F(q, alpha), "dF_dq": Fq(q, alpha), "dF_dalpha": jax.grad(F, 1)(q, alpha),
-            "d2F_dq2": jax.grad(Fq, 0)(q, alpha), "d2F_dq_dalpha": jax.grad(Fq, 1)(q, alpha)}
+    """F and dF/dq, dF/dalpha, d2F/dq2, d2F/dq dalpha at (q, alpha) (``reduced_jet``)."""
+    jet, _, _ = reduced_jet(q, alpha, red, scene, disc)
+    return dict(zip(JET_NAMES, jet))
 
 
 def reduced_energy(x, alpha, args):
@@ -200,23 +248,26 @@ def one_mode_function(q, alpha, red: Reduction, scene, disc):
     return jnp.dot(_gradient(q * red.psi, alpha, scene, disc), red.psi)
 
 
-def _fold_system(function):
-    def residual(x, args):
-        f = lambda q, a: function(q, a, *args)
-        return jnp.stack([f(x[0], x[1]), jax.grad(f, 0)(x[0], x[1])])
-    return residual
+def _fold_newton(jet, x0, args, tol):
+    """Newton on (F, dF/dq)(q, alpha) = 0 from x0 = (q, alpha), with the exact Jacobian
+    [[F_q, F_alpha], [F_qq, F_q alpha]] from the same closed-form jet."""
+    def linearise(x, a):
+        d = jet(x[0], x[1], *a)[0]
+        return d[:2], d[jnp.array([[1, 2], [3, 4]])]
+
+    return newton(None, x0, args, tol=tol, linearise=linearise)
 
 
 def one_mode_fold(red, scene, disc, q_guess, alpha_guess, tol: float = 1e-14):
     """Newton on F0 = dF0/dq = 0: the paper's initial approximation (q0, alpha0) of a fold."""
-    return newton(_fold_system(one_mode_function), jnp.stack([q_guess, alpha_guess]),
-                  (red, scene, disc), tol=tol)
+    jet = lambda q, a, *args: (one_mode_jet(q, a, *args),)
+    return _fold_newton(jet, jnp.stack([q_guess, alpha_guess]), (red, scene, disc), tol)
 
 
 def reduced_fold(red, scene, disc, q_guess, alpha_guess, tol: float = 1e-13):
     """Newton on F = dF/dq = 0 (the paper's 2 x 2 fold system) from (q_guess, alpha_guess)."""
-    return newton(_fold_system(reduced_function), jnp.stack([q_guess, alpha_guess]),
-                  (red, scene, disc), tol=tol)
+    return _fold_newton(reduced_jet, jnp.stack([q_guess, alpha_guess]), (red, scene, disc),
+                        tol)
 
 
 #: Capacity of the one-mode continuation that brackets the folds (one unknown: cheap).
@@ -244,9 +295,8 @@ def _reduced_fold_pair(scene: DipoleMagnet, disc: PlanarDiscretisation, tol):
     full = jax.vmap(lambda x: reduced_fold(red, scene, disc, x[0], x[1], tol))(one.x)
 
     def report(x):
-        q, a = x[0], x[1]
-        theta, stats = reduced_state(q, a, red, scene, disc)
-        return reduced_derivatives(q, a, red, scene, disc), tip_angle(theta, disc), stats, theta
+        jet, theta, stats = reduced_jet(x[0], x[1], red, scene, disc)
+        return dict(zip(JET_NAMES, jet)), tip_angle(theta, disc), stats, theta
 
     derivs, tip, inner, theta = jax.vmap(report)(full.x)
     return found, one, full, derivs, tip, inner, theta, red

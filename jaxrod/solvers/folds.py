@@ -60,25 +60,32 @@ def moore_spence_residual(z, data):
     return jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
 
 
-def moore_spence_jacobian(z, data):
-    """The exact Jacobian of ``moore_spence_residual`` in z (module docstring)."""
+def moore_spence_linearisation(z, data):
+    """(``moore_spence_residual``, its exact Jacobian in z) from one assembly of the
+    Hessian's blocks (module docstring)."""
     energy, ell, args = data
     model = as_model(energy)
     m = ell.shape[0]
     x, phi, lam = z[:m], z[m:2 * m], z[-1]
     H, g_lam, T, Hphi_lam = model.fold_blocks(x, lam, args, phi)
+    F = model.gradient(x, lam, args)
+    R = jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
     zero = jnp.zeros_like(H)
     top = jnp.hstack([H, zero, g_lam[:, None]])
     mid = jnp.hstack([T, H, Hphi_lam[:, None]])
     bottom = jnp.concatenate([jnp.zeros(m, H.dtype), ell, jnp.zeros(1, H.dtype)])[None, :]
-    return jnp.vstack([top, mid, bottom])
+    return R, jnp.vstack([top, mid, bottom])
+
+
+def moore_spence_jacobian(z, data):
+    """The exact Jacobian of ``moore_spence_residual`` in z (module docstring)."""
+    return moore_spence_linearisation(z, data)[1]
 
 
 def _solve_fold(energy, x0, lam0, phi0, args, tol):
     ell = phi0 / jnp.dot(phi0, phi0)
     z0 = jnp.concatenate([x0, phi0, jnp.atleast_1d(lam0)])
-    res = newton(moore_spence_residual, z0, (energy, ell, args), tol=tol,
-                 jacobian=moore_spence_jacobian)
+    res = newton(None, z0, (energy, ell, args), tol=tol, linearise=moore_spence_linearisation)
     m = x0.shape[0]
     return FoldPoint(res.x[:m], res.x[-1], res.x[m:2 * m], res)
 
@@ -102,9 +109,9 @@ def differentiable_fold(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13
     """
     ell = jax.lax.stop_gradient(phi0 / jnp.dot(phi0, phi0))
     z0 = jnp.concatenate([x0, phi0, jnp.atleast_1d(lam0)])
-    data = (energy, ell, args)
-    return implicit_newton(lambda z: moore_spence_residual(z, data), z0, tol,
-                           jacobian=lambda z: moore_spence_jacobian(z, data))
+    return implicit_newton(lambda z, p: moore_spence_residual(z, (energy, *p)), z0,
+                           (ell, args), tol,
+                           linearise=lambda z, p: moore_spence_linearisation(z, (energy, *p)))
 
 
 def fold_coefficients(energy: Energy, x, lam, phi, args, mean: Callable[[jax.Array], Any]):

@@ -19,6 +19,7 @@ are static.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -68,7 +69,9 @@ def _norm(v):
 def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args: Any = None, *,
            tol: float = 1e-12, xtol: float = 1e-10, max_steps: int = 50,
            max_halvings: int = 12, stall_xtol: float = 1e-7,
-           jacobian: Callable[[jax.Array, Any], jax.Array] | None = None) -> NewtonResult:
+           jacobian: Callable[[jax.Array, Any], jax.Array] | None = None,
+           linearise: Callable[[jax.Array, Any], tuple[jax.Array, jax.Array]] | None = None,
+           ) -> NewtonResult:
     """Solve ``residual(x, args) = 0`` from ``x0`` (square system, x a 1-D array).
 
     Args:
@@ -83,22 +86,30 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         round-off floor: accepted as converged.
       jacobian: ``jacobian(x, args)`` = dF/dx, exact (assembled from the problem's
         structure); default ``jax.jacfwd`` of the residual.
+      linearise: ``linearise(x, args)`` = (F, dF/dx) in one evaluation (where the two share
+        their expensive parts); replaces ``residual`` (which may then be None) and
+        ``jacobian``. The Jacobian is then also formed at a rejected trial point (rare).
 
     The loop evaluates F at one place and the Jacobian at one other (each pass tries one
-    step length), so the compiled program holds one copy of each.
+    step length), or both at one place with ``linearise``, so the compiled program holds one
+    copy of each.
     """
     x0 = jnp.asarray(x0)
     if not jnp.issubdtype(x0.dtype, jnp.floating):
         x0 = x0.astype(jnp.float64)  # float32 input stays float32 (tolerances are the caller's)
-    f = lambda x: residual(x, args)
-    jac = jax.jacfwd(f) if jacobian is None else (lambda x: jacobian(x, args))
+    if linearise is None:
+        f = lambda x: residual(x, args)
+        jac = jax.jacfwd(f) if jacobian is None else (lambda x: jacobian(x, args))
+        fj = lambda x: (f(x), jac)
+    else:
+        fj = lambda x: (lambda F, J: (F, lambda _: J))(*linearise(x, args))
     dtype = x0.dtype
     min_t = 0.5**max_halvings
 
     def step(s: _State) -> _State:
         first = s.k < 0  # the pass that evaluates F(x0)
         trial = s.x + s.t * s.dx
-        ft = f(trial)
+        ft, jac_at = fj(trial)
         fn = _norm(ft)
         finite = jnp.all(jnp.isfinite(trial)) & jnp.isfinite(fn)
         accepted = jnp.where(first, finite, fn < (1.0 - 0.25 * s.t) * s.fnorm)
@@ -117,7 +128,7 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         exhausted = ~first & ~move & (s.t <= min_t)
         at_floor = exhausted & (_norm(s.dx) <= stall_xtol * (1.0 + _norm(s.x)))
         new_direction = move & ~converged_here & (k < max_steps)
-        dx = jax.lax.cond(new_direction, lambda: jnp.linalg.solve(jac(x), -ft),
+        dx = jax.lax.cond(new_direction, lambda: jnp.linalg.solve(jac_at(x), -ft),
                           lambda: s.dx)
         bad_direction = new_direction & ~jnp.all(jnp.isfinite(dx))
         status = jnp.where(
@@ -136,28 +147,49 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
     return NewtonResult(final.x, converged, final.fnorm, jnp.maximum(final.k, 0), final.status)
 
 
-def implicit_newton(residual: Callable[[jax.Array], jax.Array], x0: jax.Array,
-                    tol: float = 1e-13, jacobian: Callable[[jax.Array], jax.Array] | None = None):
-    """(x, stats): a root of ``residual`` by ``newton`` from x0, differentiable by the
-    implicit function theorem (``lax.custom_root``).
+def implicit_newton(residual: Callable[[jax.Array, Any], jax.Array] | None, x0: jax.Array,
+                    params: Any, tol: float = 1e-13,
+                    jacobian: Callable[[jax.Array, Any], jax.Array] | None = None,
+                    linearise: Callable[[jax.Array, Any], tuple[jax.Array, jax.Array]]
+                    | None = None):
+    """(x, stats): a root of ``residual(x, params) = 0`` by ``newton`` from x0,
+    differentiable in ``params`` by the implicit function theorem.
 
-    ``residual`` closes over the parameters p that x(p) depends on. The primal is Newton's
-    solve; the tangent is one dense solve with the Jacobian at the root,
-    dx = -(dR/dx)^-1 (dR/dp) dp, so Newton's iterations are never differentiated and the
-    starting point carries no gradient. ``stats`` = (converged as 0/1, residual norm,
-    iterations) as a float array (custom_root's tangent rule cannot carry integer outputs).
-    Under ``vmap`` each batch element gets its own solve. ``jacobian(x)``, if given, is the
-    exact dR/dx that Newton uses (the tangent solve linearises ``residual`` itself).
+    The primal is Newton's solve; the tangent (a ``jax.custom_jvp`` rule) is one dense solve
+    with the Jacobian at the root,
+
+        dx = -(dR/dx)^-1 (dR/dparams . dparams),
+
+    where dR/dparams . dparams is one forward-mode pass through ``residual`` at the root
+    (give it with ``linearise`` where it is cheaper than the linearisation) and dR/dx is the
+    exact Jacobian Newton uses (``jacobian``, or ``linearise`` giving both, as in
+    ``newton``; forward-mode autodiff of ``residual`` when neither is given). Newton's
+    iterations are never differentiated and the starting point carries no gradient.
+    ``stats`` = (converged as 0/1, residual norm, iterations) as a float array, with zero
+    tangent. Under ``vmap`` each batch element gets its own solve; under ``jacfwd`` the
+    tangents share one factorisation of dR/dx.
     """
-    jac = None if jacobian is None else (lambda z, _: jacobian(z))
+    if linearise is None:
+        jac = (lambda x, p: jax.jacfwd(residual)(x, p)) if jacobian is None else jacobian
+        linearise = lambda x, p: (residual(x, p), jac(x, p))
+    if residual is None:
+        residual = lambda x, p: linearise(x, p)[0]
+    return _implicit_root(residual, linearise, tol, jax.lax.stop_gradient(x0), params)
 
-    def solve(f, z_init):
-        res = newton(lambda z, _: f(z), z_init, None, tol=tol, jacobian=jac)
-        return res.x, jnp.stack([res.converged.astype(z_init.dtype), res.residual_norm,
-                                 res.iterations.astype(z_init.dtype)])
 
-    def tangent_solve(g, y):
-        return jnp.linalg.solve(jax.jacfwd(g)(y), y)
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1, 2))
+def _implicit_root(residual, linearise, tol, x0, params):
+    res = newton(None, x0, params, tol=tol, linearise=linearise)
+    return res.x, jnp.stack([res.converged.astype(x0.dtype), res.residual_norm,
+                             res.iterations.astype(x0.dtype)])
 
-    return jax.lax.custom_root(residual, jax.lax.stop_gradient(x0), solve, tangent_solve,
-                               has_aux=True)
+
+@_implicit_root.defjvp
+def _implicit_root_jvp(residual, linearise, tol, primals, tangents):
+    x0, params = primals
+    _, dparams = tangents
+    x, stats = _implicit_root(residual, linearise, tol, x0, params)
+    _, J = linearise(x, params)
+    dR = jax.jvp(lambda p: residual(x, p), (params,), (dparams,))[1]
+    dx = -jnp.linalg.solve(J, dR)
+    return (x, stats), (dx, jnp.zeros_like(stats))
