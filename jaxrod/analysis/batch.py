@@ -32,7 +32,7 @@ import jax.numpy as jnp
 
 from jaxrod.analysis.reduction import normalised_mode
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
-from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, dipole_potential, magnet_direction
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers.folds import moore_spence_linearisation
 from jaxrod.solvers.newton import newton
 
@@ -47,16 +47,37 @@ TOLERANCES = {jnp.dtype("float64"): (1e-13, 1e-10, 1e-7),
 
 
 def _one_mode_moments(q, psi_quad, disc):
-    """The q-dependent integrals of the one-mode state theta = q psi: X, dX/dq, d2X/dq2,
-    int (1 - s) sin(q psi) psi and int (1 - s) cos(q psi) psi^2."""
-    th = q * psi_quad
+    """The q-dependent integrals of the one-mode state theta = q psi: X, dX/dq, d2X/dq2
+    (last axis: the (e1, e3) pair), int (1 - s) sin(q psi) psi and
+    int (1 - s) cos(q psi) psi^2, for q of any shape."""
+    th = q[..., None] * psi_quad
     S, C = jnp.sin(th), jnp.cos(th)
-    lever = 1.0 - disc.quad_nodes
-    I = disc.integrate
-    X = jnp.stack([I(S), I(C)])
-    dX = jnp.stack([I(C * psi_quad), -I(S * psi_quad)])
-    d2X = -jnp.stack([I(S * psi_quad**2), I(C * psi_quad**2)])
-    return X, dX, d2X, I(lever * S * psi_quad), I(lever * C * psi_quad**2)
+    w = disc.quad_weights
+    lever = w * (1.0 - disc.quad_nodes)
+    X = jnp.stack([S @ w, C @ w], axis=-1)
+    dX = jnp.stack([C @ (w * psi_quad), -(S @ (w * psi_quad))], axis=-1)
+    d2X = -jnp.stack([S @ (w * psi_quad**2), C @ (w * psi_quad**2)], axis=-1)
+    return X, dX, d2X, S @ (lever * psi_quad), C @ (lever * psi_quad**2)
+
+
+def _dipole_terms(X, dX, d2X, p, D):
+    """(grad Phi . X', X'^T Hess Phi X' + grad Phi . X'') of the dipole potential
+    Phi(x) = p . r / |r|^3, r = x - D p (``dipole_potential``), in closed form:
+
+        grad Phi = p / |r|^3 - 3 (p . r) r / |r|^5,
+        v^T Hess Phi v = -3 (2 (r . v)(p . v) + (p . r) |v|^2) / |r|^5
+                         + 15 (p . r)(r . v)^2 / |r|^7.
+
+    Vectors carry the (e1, e3) pair on the last axis; leading axes broadcast."""
+    dot = lambda a, b: jnp.sum(a * b, axis=-1)
+    r = X - D * p
+    inv2 = 1.0 / dot(r, r)
+    inv3 = inv2 * jnp.sqrt(inv2)
+    pr, rv, pv = dot(p, r), dot(r, dX), dot(p, dX)
+    g_v = inv3 * (pv - 3.0 * pr * rv * inv2)
+    g_a = inv3 * (dot(p, d2X) - 3.0 * pr * dot(r, d2X) * inv2)
+    vHv = inv3 * inv2 * (-3.0 * (2.0 * rv * pv + pr * dot(dX, dX)) + 15.0 * pr * rv**2 * inv2)
+    return g_v, vHv + g_a
 
 
 def _one_mode_derivatives(q, moments, alpha, bend, scene: DipoleMagnet):
@@ -66,16 +87,14 @@ def _one_mode_derivatives(q, moments, alpha, bend, scene: DipoleMagnet):
         dF0/dq = int psi'^2 - G int (1-s) cos(q psi) psi^2
                  + M (X'^T Hess Phi(X) X' + grad Phi(X) . X'')
 
-    with X(q) = int (sin q psi, cos q psi) and Phi the dipole potential.
-    """
+    with X(q) = int (sin q psi, cos q psi) and Phi the dipole potential; q and alpha
+    broadcast (the grid: q along the last axis, alpha along the first)."""
     X, dX, d2X, gravity1, gravity2 = moments
-    p = magnet_direction(alpha)
-    grad = jax.grad(dipole_potential)
-    g = grad(X, p, scene.D)
-    Hv = jax.jvp(lambda x: grad(x, p, scene.D), (X,), (dX,))[1]
-    F0 = q * bend - scene.G * gravity1 + scene.M * jnp.dot(g, dX)
-    F0q = bend - scene.G * gravity2 + scene.M * (jnp.dot(dX, Hv) + jnp.dot(g, d2X))
-    return jnp.stack([F0, F0q])
+    p = jnp.stack([jnp.sin(alpha), jnp.cos(alpha)], axis=-1)[..., None, :]
+    g_v, second = _dipole_terms(X, dX, d2X, p, scene.D)
+    F0 = q * bend - scene.G * gravity1 + scene.M * g_v
+    F0q = bend - scene.G * gravity2 + scene.M * second
+    return jnp.stack([F0, F0q], axis=-1)
 
 
 def _sign_change(X):
@@ -107,9 +126,7 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation):
     bend = disc.integrate(dpsi_q**2)
     qs = jnp.linspace(0.0, Q_MAX, GRID_Q, dtype=dtype)
     al = jnp.linspace(0.0, 0.5 * jnp.pi, GRID_ALPHA, dtype=dtype)
-    moments = jax.vmap(lambda q: _one_mode_moments(q, psi_q, disc))(qs)
-    values = jax.vmap(lambda a: jax.vmap(
-        lambda q, mo: _one_mode_derivatives(q, mo, a, bend, scene))(qs, moments))(al)
+    values = _one_mode_derivatives(qs, _one_mode_moments(qs, psi_q, disc), al, bend, scene)
     cells = _sign_change(values[..., 0]) & _sign_change(values[..., 1])
     # the cells of smallest and largest alpha (row-major order: alpha first) that both
     # contours cross bracket the lower and the upper one-mode fold
@@ -121,7 +138,7 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation):
 
     def one_mode(x0):
         residual = lambda x, _: _one_mode_derivatives(
-            x[0], _one_mode_moments(x[0], psi_q, disc), x[1], bend, scene)
+            x[:1], _one_mode_moments(x[:1], psi_q, disc), x[1:], bend, scene)[0, 0]
         return newton(residual, x0, None, tol=tol, xtol=xtol, stall_xtol=stall, max_steps=20)
 
     one = jax.vmap(one_mode)(start)
