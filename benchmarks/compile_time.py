@@ -74,7 +74,7 @@ def child(imports: str, call: str, cache_dir: str | None) -> dict:
                         imports=imports, call=call)
     t0 = time.perf_counter()
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=900)
+                          env=_own_caches_only(os.environ), timeout=1800)
     process = time.perf_counter() - t0
     line = [x for x in proc.stdout.splitlines() if x.startswith("RESULT ")]
     if proc.returncode or not line:
@@ -85,16 +85,22 @@ def child(imports: str, call: str, cache_dir: str | None) -> dict:
     return out
 
 
-def _without_no_cache(environ) -> dict:
-    """The environment less JAXROD_NO_CACHE (set by the test suite), so that each run here
-    gets exactly the cache it asks for."""
-    return {k: v for k, v in environ.items() if k != "JAXROD_NO_CACHE"}
+#: Variables that would give a measured process a compilation cache it did not ask for (the
+#: test suite sets them).
+_CACHE_VARIABLES = ("JAXROD_NO_CACHE", "JAXROD_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR",
+                    "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS")
+
+
+def _own_caches_only(environ) -> dict:
+    """The environment less every cache setting, so that each run here gets exactly the
+    cache it asks for."""
+    return {k: v for k, v in environ.items() if k not in _CACHE_VARIABLES}
 
 
 def cli_process(argv: list[str], env: dict) -> float:
     t0 = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", *argv], capture_output=True,
-                          text=True, env=_without_no_cache(os.environ) | env, timeout=900)
+                          text=True, env=_own_caches_only(os.environ) | env, timeout=1800)
     if proc.returncode:
         raise RuntimeError(proc.stderr[-500:])
     return time.perf_counter() - t0
@@ -112,7 +118,8 @@ def run(quick: bool, auto: bool) -> dict:
                 print(json.dumps(r), flush=True)
     cli = {}
     t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-c", "import jax"], check=True, timeout=300)
+    subprocess.run([sys.executable, "-c", "import jax"], check=True, timeout=300,
+                   env=_own_caches_only(os.environ))
     cli["import_jax_process_s"] = time.perf_counter() - t0
     with tempfile.TemporaryDirectory() as cache:
         argv = ["folds", *MAGNET, "--json"]

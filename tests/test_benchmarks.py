@@ -8,7 +8,7 @@ BENCH = Path(__file__).resolve().parent.parent / "benchmarks"
 
 def run_quick(script, tmp_path):
     proc = subprocess.run([sys.executable, str(BENCH / script), "--quick", "--out",
-                           str(tmp_path)], capture_output=True, text=True, timeout=600)
+                           str(tmp_path)], capture_output=True, text=True, timeout=3600)
     assert proc.returncode == 0, proc.stderr[-2000:]
     return json.loads((tmp_path / script.replace(".py", ".json")).read_text())
 
@@ -91,3 +91,10 @@ def test_three_d_cost_quick(tmp_path):
         assert abs(r["fold_error_3d_deg"] - r["fold_error_planar_deg"]) < 1e-10
         assert abs(r["equilibrium_error_3d_deg"] - r["equilibrium_error_planar_deg"]) < 1e-10
     assert (tmp_path / "three_d_cost.png").exists()
+
+
+def test_dense_solve_quick(tmp_path):
+    # the vectorised elimination solves the same systems as LAPACK (diagonally dominant)
+    result = run_quick("dense_solve.py", tmp_path)
+    for r in result["rows"]:
+        assert r["max_difference"] < (1e-12 if r["dtype"] == "float64" else 1e-4), r

@@ -41,23 +41,44 @@ GRID_Q, GRID_ALPHA, Q_MAX = 40, 40, 1.6
 #: Bracketing cells kept per parameter set before the first and last are picked.
 CANDIDATES = 64
 
+#: Newton's budgets in the batch (its loops run to the slowest element): the one-mode solve
+#: (2 x 2, cheap) may halve its steps often; the Moore-Spence solve from the one-mode fold
+#: converges in at most 4 steps at the paper's parameters, in 12 at a clearance D = 1.03
+#: (the upper fold's tip at 80 degrees), and with at most 4 halvings wherever it converges
+#: over E = 50-300 GPa, D = 1.1-1.6 and 0.3-3 times the magnet.
+ONE_MODE_BUDGET = {"max_steps": 20, "max_halvings": 12}
+FOLD_BUDGET = {"max_steps": 16, "max_halvings": 4}
+
 #: Newton tolerances per precision: (tol on |residual|, xtol, stall_xtol).
 TOLERANCES = {jnp.dtype("float64"): (1e-13, 1e-10, 1e-7),
               jnp.dtype("float32"): (1e-5, 1e-4, 1e-3)}
 
 
-def _one_mode_moments(q, psi_quad, disc):
-    """The q-dependent integrals of the one-mode state theta = q psi: X, dX/dq, d2X/dq2
-    (last axis: the (e1, e3) pair), int (1 - s) sin(q psi) psi and
-    int (1 - s) cos(q psi) psi^2, for q of any shape."""
-    th = q[..., None] * psi_quad
-    S, C = jnp.sin(th), jnp.cos(th)
+def _one_mode_moments(q, psi_quad, disc, S=None, C=None):
+    """The q-dependent integrals of the one-mode state theta = q psi: X, dX/dq, d2X/dq2 (each
+    an (e1, e3) pair of arrays), int (1 - s) sin(q psi) psi and int (1 - s) cos(q psi) psi^2,
+    for q of any shape; S, C = sin, cos(q psi) at the nodes when already known."""
+    if S is None:
+        th = q[..., None] * psi_quad
+        S, C = jnp.sin(th), jnp.cos(th)
     w = disc.quad_weights
-    lever = w * (1.0 - disc.quad_nodes)
-    X = jnp.stack([S @ w, C @ w], axis=-1)
-    dX = jnp.stack([C @ (w * psi_quad), -(S @ (w * psi_quad))], axis=-1)
-    d2X = -jnp.stack([S @ (w * psi_quad**2), C @ (w * psi_quad**2)], axis=-1)
-    return X, dX, d2X, S @ (lever * psi_quad), C @ (lever * psi_quad**2)
+    wp, wp2, lever = w * psi_quad, w * psi_quad**2, w * (1.0 - disc.quad_nodes) * psi_quad
+    return ((S @ w, C @ w), (C @ wp, -(S @ wp)), (-(S @ wp2), -(C @ wp2)), S @ lever,
+            C @ (lever * psi_quad))
+
+
+def _grid_sines(h, count, psi_quad):
+    """sin and cos of k h psi at the nodes for k = 0 .. count - 1 (count, nq), by the angle
+    addition recurrence from one sine and cosine per node (the grid only brackets sign
+    changes; the recurrence's round-off, a few ulp per step, does not matter there)."""
+    s1, c1 = jnp.sin(h * psi_quad), jnp.cos(h * psi_quad)
+
+    def step(sc, _):
+        s, c = sc
+        return (s * c1 + c * s1, c * c1 - s * s1), sc
+
+    _, (S, C) = jax.lax.scan(step, (jnp.zeros_like(s1), jnp.ones_like(c1)), None, length=count)
+    return S, C
 
 
 def _dipole_terms(X, dX, d2X, p, D):
@@ -68,9 +89,9 @@ def _dipole_terms(X, dX, d2X, p, D):
         v^T Hess Phi v = -3 (2 (r . v)(p . v) + (p . r) |v|^2) / |r|^5
                          + 15 (p . r)(r . v)^2 / |r|^7.
 
-    Vectors carry the (e1, e3) pair on the last axis; leading axes broadcast."""
-    dot = lambda a, b: jnp.sum(a * b, axis=-1)
-    r = X - D * p
+    Each vector is an (e1, e3) pair of arrays that broadcast."""
+    dot = lambda a, b: a[0] * b[0] + a[1] * b[1]
+    r = (X[0] - D * p[0], X[1] - D * p[1])
     inv2 = 1.0 / dot(r, r)
     inv3 = inv2 * jnp.sqrt(inv2)
     pr, rv, pv = dot(p, r), dot(r, dX), dot(p, dX)
@@ -87,14 +108,13 @@ def _one_mode_derivatives(q, moments, alpha, bend, scene: DipoleMagnet):
         dF0/dq = int psi'^2 - G int (1-s) cos(q psi) psi^2
                  + M (X'^T Hess Phi(X) X' + grad Phi(X) . X'')
 
-    with X(q) = int (sin q psi, cos q psi) and Phi the dipole potential; q and alpha
-    broadcast (the grid: q along the last axis, alpha along the first)."""
+    with X(q) = int (sin q psi, cos q psi) and Phi the dipole potential; q (with its moments)
+    and alpha broadcast against each other."""
     X, dX, d2X, gravity1, gravity2 = moments
-    p = jnp.stack([jnp.sin(alpha), jnp.cos(alpha)], axis=-1)[..., None, :]
+    p = (jnp.sin(alpha), jnp.cos(alpha))
     g_v, second = _dipole_terms(X, dX, d2X, p, scene.D)
-    F0 = q * bend - scene.G * gravity1 + scene.M * g_v
-    F0q = bend - scene.G * gravity2 + scene.M * second
-    return jnp.stack([F0, F0q], axis=-1)
+    return (q * bend - scene.G * gravity1 + scene.M * g_v,
+            bend - scene.G * gravity2 + scene.M * second)
 
 
 def _sign_change(X):
@@ -126,8 +146,9 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation):
     bend = disc.integrate(dpsi_q**2)
     qs = jnp.linspace(0.0, Q_MAX, GRID_Q, dtype=dtype)
     al = jnp.linspace(0.0, 0.5 * jnp.pi, GRID_ALPHA, dtype=dtype)
-    values = _one_mode_derivatives(qs, _one_mode_moments(qs, psi_q, disc), al, bend, scene)
-    cells = _sign_change(values[..., 0]) & _sign_change(values[..., 1])
+    moments = _one_mode_moments(qs, psi_q, disc, *_grid_sines(qs[1], GRID_Q, psi_q))
+    F0, F0q = _one_mode_derivatives(qs, moments, al[:, None], bend, scene)
+    cells = _sign_change(F0) & _sign_change(F0q)
     # the cells of smallest and largest alpha (row-major order: alpha first) that both
     # contours cross bracket the lower and the upper one-mode fold
     count = jnp.sum(cells)
@@ -135,23 +156,28 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation):
     pick = jnp.stack([0, jnp.clip(count - 1, 0, CANDIDATES - 1)])
     ia, iq = ia[pick], iq[pick]
     start = jnp.stack([0.5 * (qs[iq] + qs[iq + 1]), 0.5 * (al[ia] + al[ia + 1])], axis=1)
+    # a batch runs its Newton loops until the slowest element is done: an element without
+    # brackets starts from NaN, which ends its solves at the first pass (not converged)
+    start = jnp.where(count >= 2, start, jnp.nan)
 
     def one_mode(x0):
-        residual = lambda x, _: _one_mode_derivatives(
-            x[:1], _one_mode_moments(x[:1], psi_q, disc), x[1:], bend, scene)[0, 0]
-        return newton(residual, x0, None, tol=tol, xtol=xtol, stall_xtol=stall, max_steps=20)
+        residual = lambda x, _: jnp.stack(_one_mode_derivatives(
+            x[0], _one_mode_moments(x[0], psi_q, disc), x[1], bend, scene))
+        return newton(residual, x0, None, tol=tol, xtol=xtol, stall_xtol=stall, **ONE_MODE_BUDGET)
 
     one = jax.vmap(one_mode)(start)
     found = (count >= 2) & jnp.all(one.converged)
 
-    def moore_spence(x):
-        ell = psi / jnp.dot(psi, psi)
-        z0 = jnp.concatenate([x[0] * psi, psi, x[1:2]])
-        return newton(None, z0, (ALPHA_MODEL, ell, (scene, disc)), tol=tol, xtol=xtol,
-                      stall_xtol=stall, max_steps=20, linearise=moore_spence_linearisation)
+    ell = psi / jnp.dot(psi, psi)
 
-    ms = jax.vmap(moore_spence)(one.x)
-    z = jax.vmap(lambda z: _canonical(z, disc.size))(ms.x)
+    def fold(x):
+        z0 = jnp.where(found, jnp.concatenate([x[0] * psi, psi, x[1:2]]), jnp.nan)
+        res = newton(None, z0, (ALPHA_MODEL, ell, (scene, disc)), tol=tol, xtol=xtol,
+                     stall_xtol=stall, linearise=moore_spence_linearisation, **FOLD_BUDGET)
+        return res.x, res
+
+    states, ms = jax.vmap(fold)(one.x)
+    z = jax.vmap(lambda z: _canonical(z, disc.size))(states)
     z = z[jnp.argsort(z[:, -1])]
     alphas = z[:, -1]
     in_range = jnp.all((alphas > 0.0) & (alphas <= 0.5 * jnp.pi))
