@@ -26,10 +26,13 @@ from jaxrod.params import (
 
 
 def _enable_compilation_cache() -> None:
-    """Persist compiled programs between runs (set JAXROD_NO_CACHE=1 to disable)."""
+    """Persist compiled programs between runs, and the traced programs of the main entry
+    points beside them (``jaxrod.stored``); set JAXROD_NO_CACHE=1 to disable."""
     if os.environ.get("JAXROD_NO_CACHE"):
         return
     import jax
+
+    from jaxrod.stored import enable_store
 
     cache = os.environ.get("JAXROD_CACHE_DIR",
                            os.path.join(os.path.expanduser("~"), ".cache", "jaxrod", "xla"))
@@ -37,6 +40,7 @@ def _enable_compilation_cache() -> None:
         os.makedirs(cache, exist_ok=True)
         jax.config.update("jax_compilation_cache_dir", cache)
         jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
+        enable_store(os.path.join(cache, "exported"))
     except OSError:
         pass
 

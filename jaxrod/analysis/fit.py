@@ -52,6 +52,7 @@ from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import NDFEB_MAGNET, ParameterError, preset
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers.folds import differentiable_fold
+from jaxrod.stored import StoredProgram
 
 ANGLE_NAMES = ("cw_capture", "cw_release", "ccw_capture", "ccw_release")
 _SIGNS = jnp.array([-1.0, 1.0, 1.0, -1.0])  # fold angle sign per measured angle
@@ -208,7 +209,7 @@ def _fit_core(measured, mask, sigma, fit_offset, setup: FitSetup, log_e0, max_it
         s.ok & found, s.k, jnp.max(jnp.abs(s.J.T @ s.r))
 
 
-_fit_jit = jax.jit(_fit_core, static_argnames=("max_iter",))
+_fit_jit = StoredProgram("fit", _fit_core, static_argnames=("max_iter",))
 _fit_batch_jit = jax.jit(jax.vmap(_fit_core, in_axes=(0, 0, None, None, None, None)))
 
 

@@ -29,6 +29,7 @@ from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.descent import descend
 from jaxrod.solvers.folds import differentiable_fold, fold_coefficients, moore_spence_solve
 from jaxrod.solvers.newton import newton
+from jaxrod.stored import StoredProgram
 
 #: Default Chebyshev degree. At the paper's parameters the fold angles reach their round-off
 #: floor (~1e-11 degrees) from N = 12 (benchmarks/magnet_convergence.py); 16 keeps a margin.
@@ -64,9 +65,8 @@ def default_options(max_points: int = 400) -> ContinuationOptions:
                                lam_max=math.pi / 2, tol=1e-12, max_points=max_points)
 
 
-@functools.partial(jax.jit, static_argnames="capacity")
-def _diagram(scene: DipoleMagnet, disc: PlanarDiscretisation, options: ContinuationOptions,
-             capacity: int):
+def _diagram_program(scene: DipoleMagnet, disc: PlanarDiscretisation,
+                     options: ContinuationOptions, capacity: int):
     start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc),
                    jacobian=_alpha_jacobian)
     trace = lambda d: continuation_run(ALPHA_MODEL, start.x, 0.0, (scene, disc), options,
@@ -74,6 +74,9 @@ def _diagram(scene: DipoleMagnet, disc: PlanarDiscretisation, options: Continuat
     runs = jax.vmap(trace)(jnp.array([-1.0, 1.0]))
     observed = jax.vmap(lambda th, a: _observables_of(th, a, scene, disc))(runs.x, runs.lam)
     return start, runs, observed
+
+
+_diagram = StoredProgram("magnet-diagram", _diagram_program, static_argnames=("capacity",))
 
 
 def _alpha_residual(theta, args):
@@ -111,6 +114,7 @@ def trace_diagram(scene: DipoleMagnet, n: int = DEFAULT_N,
                                      options.max_points)
     if not bool(start.converged):
         raise RuntimeError(f"no equilibrium at alpha = 0: {start.message()}")
+    runs, observed = jax.device_get((runs, observed))  # index on the host
     left, right = (jax.tree_util.tree_map(lambda v, i=i: v[i], (runs, observed))
                    for i in (0, 1))
     return branch_from_runs([(left[0], True, left[1]), (right[0], False, right[1])])
@@ -173,10 +177,12 @@ def _refine_one(theta0, alpha0, scene, disc, tol):
     return fp, _fold_report(fp.x, fp.lam, fp.null_vector, scene, disc)
 
 
-@jax.jit
-def _refine_batch(theta0, alpha0, scene, disc, tol):
+def _refine_program(theta0, alpha0, scene, disc, tol):
     return jax.vmap(_refine_one, in_axes=(0, 0, None, None, None))(theta0, alpha0, scene, disc,
                                                                     tol)
+
+
+_refine_batch = StoredProgram("magnet-refine", _refine_program)
 
 
 def _fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
@@ -242,9 +248,10 @@ def refine_folds(scene: DipoleMagnet, disc: PlanarDiscretisation, theta0, alpha0
 
     The null-vector guess is the lowest eigenvector of the Hessian at each start.
     """
-    theta0 = jnp.atleast_2d(jnp.asarray(theta0, jnp.float64))
-    alpha0 = jnp.atleast_1d(jnp.asarray(alpha0, jnp.float64))
-    fp, rep = _refine_batch(theta0, alpha0, scene, disc, tol)
+    theta0 = np.atleast_2d(np.asarray(theta0, np.float64))
+    alpha0 = np.atleast_1d(np.asarray(alpha0, np.float64))
+    # on the host at once: indexing device arrays would compile a program per index
+    fp, rep = jax.device_get(_refine_batch(theta0, alpha0, scene, disc, tol))
     folds = []
     for i in range(alpha0.shape[0]):
         d_alpha, d_qq, c, c_tip, q, tip, eigs, phi_q = (np.asarray(v[i]) for v in rep)
