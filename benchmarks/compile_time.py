@@ -107,7 +107,7 @@ def cli_process(argv: list[str], env: dict) -> float:
 
 
 def run(quick: bool, auto: bool) -> dict:
-    names = ["greenhill", "fold_pair", "folds (locate_folds)"] if quick else list(ENTRY_POINTS)
+    names = ["greenhill"] if quick else list(ENTRY_POINTS)
     rows = []
     for name in names:
         imports, call = ENTRY_POINTS[name]
@@ -170,7 +170,7 @@ def main(argv=None) -> int:
     import jax
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="three entry points")
+    parser.add_argument("--quick", action="store_true", help="one entry point")
     parser.add_argument("--auto", action="store_true", help="include AUTO-07p's process time")
     parser.add_argument("--out", default=str(HERE / "results"))
     args = parser.parse_args(argv)

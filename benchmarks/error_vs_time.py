@@ -89,10 +89,10 @@ def error(found, ref):
 
 
 def run(quick: bool, auto: bool) -> dict:
-    ns_ms = [6, 8, 12] if quick else [4, 5, 6, 7, 8, 10, 12, 16, 24]
+    ns_ms = [8, 12] if quick else [4, 5, 6, 7, 8, 10, 12, 16, 24]
     ns_reduced = [12] if quick else [6, 8, 12, 16]
     ns_cont = [12] if quick else [8, 16]
-    repeat = 5 if quick else 20
+    repeat = 3 if quick else 20
     bvp_settings = [(1e-4, 1e-3)] if quick else [(1e-3, 1e-2), (1e-4, 1e-3), (1e-6, 1e-5),
                                                  (1e-8, 1e-7)]
     sine_modes = [8] if quick else [4, 8, 16, 32, 64]

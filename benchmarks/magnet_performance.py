@@ -78,7 +78,7 @@ def shooting_folds(G, M, folds, n):
 
 
 def convergence(quick: bool) -> dict:
-    degrees = [4, 6, 8, 12, 16] if quick else [4, 5, 6, 7, 8, 10, 12, 14, 16, 20, 24, 32]
+    degrees = [8, 12, 16] if quick else [4, 5, 6, 7, 8, 10, 12, 14, 16, 20, 24, 32]
     out = {}
     for E, (G, M) in CASES.items():
         scene = magnet.make_scene(G, M, D_EXP)

@@ -151,9 +151,9 @@ def test_no_fold_no_hysteresis():
 
 def test_changing_parameters_does_not_recompile():
     magnet.trace_diagram(magnet.make_scene(2.2, 0.0236, D_EXP))
-    before = magnet._diagram._cache_size()
+    before = magnet._diagram.jitted._cache_size()
     magnet.trace_diagram(magnet.make_scene(3.0, 0.03, 1.3))
-    assert magnet._diagram._cache_size() == before
+    assert magnet._diagram.jitted._cache_size() == before
 
 
 def test_bad_input():

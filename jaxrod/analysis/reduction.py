@@ -33,8 +33,9 @@ dropped), itself located on the one-mode diagram.
 Discretely (planar Chebyshev discretisation, free nodal values): psi from the KKT system of
 the constrained quadratic minimisation; Y spanned by an orthonormal basis Z of the null space
 of the mean functional m (m . v = int v); w = Z y with y from Newton on Z^T grad E = 0; its
-derivatives in (q, alpha) by implicit differentiation (``lax.custom_root``: one solve with
-the coercive matrix Z^T H Z per tangent, Newton's iterations are never differentiated).
+derivatives in (q, alpha) by implicit differentiation (``implicit_newton``: one solve with
+the coercive matrix Z^T H Z per tangent, Newton's iterations are never differentiated). The
+fold system's derivatives of F come in closed form (``reduced_jet``).
 """
 
 from __future__ import annotations
