@@ -224,12 +224,6 @@ def one_mode_jet(q, alpha, red: Reduction, scene, disc):
 JET_NAMES = ("F", "dF_dq", "dF_dalpha", "d2F_dq2", "d2F_dq_dalpha")
 
 
-def reduced_derivatives(q, alpha, red, scene, disc) -> dict:
-    """F and dF/dq, dF/dalpha, d2F/dq2, d2F/dq dalpha at (q, alpha) (``reduced_jet``)."""
-    jet, _, _ = reduced_jet(q, alpha, red, scene, disc)
-    return dict(zip(JET_NAMES, jet))
-
-
 def reduced_energy(x, alpha, args):
     """e(q, alpha) = E_alpha(q psi + w(q, alpha)) with x = [q]; args = (red, scene, disc).
     Its q-derivative is F: a one-unknown energy for the generic continuation."""

@@ -77,11 +77,6 @@ def moore_spence_linearisation(z, data):
     return R, jnp.vstack([top, mid, bottom])
 
 
-def moore_spence_jacobian(z, data):
-    """The exact Jacobian of ``moore_spence_residual`` in z (module docstring)."""
-    return moore_spence_linearisation(z, data)[1]
-
-
 def _solve_fold(energy, x0, lam0, phi0, args, tol):
     ell = phi0 / jnp.dot(phi0, phi0)
     z0 = jnp.concatenate([x0, phi0, jnp.atleast_1d(lam0)])
