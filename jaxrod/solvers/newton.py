@@ -97,19 +97,23 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
     x0 = jnp.asarray(x0)
     if not jnp.issubdtype(x0.dtype, jnp.floating):
         x0 = x0.astype(jnp.float64)  # float32 input stays float32 (tolerances are the caller's)
+    # evaluate(x) = (F(x), J): J as a thunk, formed only inside the branch that solves with it
     if linearise is None:
-        f = lambda x: residual(x, args)
-        jac = jax.jacfwd(f) if jacobian is None else (lambda x: jacobian(x, args))
-        fj = lambda x: (f(x), jac)
+        jac = jax.jacfwd(residual) if jacobian is None else jacobian
+
+        def evaluate(x):
+            return residual(x, args), lambda: jac(x, args)
     else:
-        fj = lambda x: (lambda F, J: (F, lambda _: J))(*linearise(x, args))
+        def evaluate(x):
+            F, J = linearise(x, args)
+            return F, lambda: J
     dtype = x0.dtype
     min_t = 0.5**max_halvings
 
     def step(s: _State) -> _State:
         first = s.k < 0  # the pass that evaluates F(x0)
         trial = s.x + s.t * s.dx
-        ft, jac_at = fj(trial)
+        ft, jac_at = evaluate(trial)
         fn = _norm(ft)
         finite = jnp.all(jnp.isfinite(trial)) & jnp.isfinite(fn)
         accepted = jnp.where(first, finite, fn < (1.0 - 0.25 * s.t) * s.fnorm)
@@ -128,7 +132,8 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         exhausted = ~first & ~move & (s.t <= min_t)
         at_floor = exhausted & (_norm(s.dx) <= stall_xtol * (1.0 + _norm(s.x)))
         new_direction = move & ~converged_here & (k < max_steps)
-        dx = jax.lax.cond(new_direction, lambda: jnp.linalg.solve(jac_at(x), -ft),
+        # a new direction needs a move, so x is the trial point the Jacobian belongs to
+        dx = jax.lax.cond(new_direction, lambda: jnp.linalg.solve(jac_at(), -ft),
                           lambda: s.dx)
         bad_direction = new_direction & ~jnp.all(jnp.isfinite(dx))
         status = jnp.where(
