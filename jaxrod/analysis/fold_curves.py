@@ -1,0 +1,472 @@
+"""Fold curves of the permanent-magnet scene in a second parameter, and the cusp where the
+hysteresis ends (the paper's design rule: the hysteresis width "is set by M and D ... a
+tunable design parameter for a remotely switched bistable element").
+
+A design point is either the groups (G, M, D) or the physical inputs
+
+    (E, rho, g, wire diameter, L, M_rod, M_magnet, magnet diameter, track radius),
+
+mapped to the groups by ``jaxrod.params`` (G = 4 rho g L^3 / (E b^2), M = 4 mu0 M_rod
+M_magnet a^3 / (3 E b^2 L), D = R_track / L) inside the traced program, so any one of them
+can be the second parameter. It varies as v = v0 (1 + u): the continuation variable u is the
+relative change, which puts every input on the same scale.
+
+``fold_curves`` starts at the two folds of the given point (``locate_folds``), follows each
+by pseudo-arclength on the Moore-Spence system in (theta, phi, alpha, u)
+(``jaxrod.solvers.fold_curve``) towards the requested value, and refines the cusp where
+d2F/dq2 changes sign along a curve (beyond it the curve continues as the other fold).
+``find_cusp`` follows the lower fold both ways and returns the nearest cusp. Along a curve
+it records alpha*, q*, tip*, dF/dalpha, d2F/dq2 (with phi scaled to int phi = 1) and the two
+smallest Hessian eigenvalues (one is zero at the fold; the other's sign tells the fold's
+stability data: a fold between a stable and an index-1 branch has it positive).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.analysis.magnet import DEFAULT_N, locate_folds
+from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
+from jaxrod.params import (
+    Magnet,
+    ParameterError,
+    Rod,
+    check_track_clearance,
+    gravity_group,
+    magnet_group,
+)
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
+from jaxrod.solvers.fold_curve import (
+    CURVE_STATUS,
+    FoldCurveOptions,
+    cubic_coefficient,
+    differentiable_cusp,
+    event_solve,
+    fold_curve_run,
+    parameter_lam,
+    quadratic_coefficient,
+    split,
+)
+from jaxrod.solvers.folds import fold_coefficients
+from jaxrod.stored import StoredProgram
+
+#: The groups, and the physical inputs in the order of ``DesignPoint.values`` (with units).
+GROUP_NAMES = ("G", "M", "D")
+PHYSICAL_NAMES = ("E", "density", "gravity", "diameter", "length", "rod-magnetisation",
+                  "remanence", "magnet-diameter", "track-radius")
+UNITS = {"G": "", "M": "", "D": "", "E": "Pa", "density": "kg/m^3", "gravity": "m/s^2",
+         "diameter": "m", "length": "m", "rod-magnetisation": "A/m", "remanence": "A/m",
+         "magnet-diameter": "m", "track-radius": "m"}
+
+
+def groups_of(kind: str, values):
+    """(G, M, D) of a design point's values (traced arithmetic)."""
+    if kind == "groups":
+        return values[0], values[1], values[2]
+    E, rho, g, d, L, m_rod, m_magnet, d_magnet, R = (values[i] for i in range(9))
+    return (gravity_group(E, rho, g, d, L), magnet_group(E, m_rod, m_magnet, d, L, d_magnet),
+            R / L)
+
+
+@dataclasses.dataclass(frozen=True)
+class DesignPoint:
+    """Where a fold curve starts: the groups (G, M, D) or the nine physical inputs.
+
+    ``magnet_radius`` (a / L, groups only) makes the clearance check refuse magnets the rod
+    could touch; physical points take it from the magnet diameter.
+    """
+
+    kind: str  # "groups" or "physical"
+    values: tuple[float, ...]
+    magnet_radius: float = 0.0
+
+    @classmethod
+    def from_groups(cls, G, M, D, magnet_radius: float | None = None) -> DesignPoint:
+        point = cls("groups", (float(G), float(M), float(D)), float(magnet_radius or 0.0))
+        point.check()
+        return point
+
+    @classmethod
+    def from_physical(cls, rod: Rod, magnet: Magnet) -> DesignPoint:
+        m = rod.material
+        point = cls("physical", (m.youngs_modulus, m.density, rod.gravity, rod.diameter,
+                                 rod.length, m.remanent_magnetisation,
+                                 magnet.saturation_magnetisation, magnet.diameter,
+                                 magnet.track_radius))
+        point.check()
+        return point
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return GROUP_NAMES if self.kind == "groups" else PHYSICAL_NAMES
+
+    def index(self, name: str) -> int:
+        if name not in self.names:
+            other = PHYSICAL_NAMES if self.kind == "groups" else GROUP_NAMES
+            hint = (" (that is a physical input: give the point by physical inputs, e.g. a "
+                    "preset)" if name in other and self.kind == "groups" else
+                    " (that is a group: give the point by --G --M --D)" if name in other
+                    else "")
+            raise ParameterError(f"vary must be one of {', '.join(self.names)}, got "
+                                 f"{name!r}{hint}")
+        return self.names.index(name)
+
+    def groups(self) -> tuple[float, float, float]:
+        return tuple(float(v) for v in groups_of(self.kind, self.values))
+
+    def radius(self) -> float:
+        """Magnet radius over rod length, a / L."""
+        if self.kind == "groups":
+            return self.magnet_radius
+        return 0.5 * self.values[7] / self.values[4]
+
+    def replace(self, name: str, value: float) -> DesignPoint:
+        values = list(self.values)
+        values[self.index(name)] = float(value)
+        return dataclasses.replace(self, values=tuple(values))
+
+    def check(self) -> None:
+        """Validate the point (ParameterError naming the offending input)."""
+        for name, v in zip(self.names, self.values, strict=True):
+            if not (math.isfinite(v) and (v > 0 or (name in ("M", "rod-magnetisation",
+                                                               "remanence") and v >= 0))):
+                raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
+        G, M, D = self.groups()
+        check_track_clearance(D, self.radius())
+
+    def as_dict(self) -> dict:
+        G, M, D = self.groups()
+        out = {name: v for name, v in zip(self.names, self.values, strict=True)}
+        return out | {"G": G, "M": M, "D": D, "magnet_radius_over_L": self.radius()}
+
+
+@jax.tree_util.register_static
+@dataclasses.dataclass(frozen=True)
+class Vary:
+    """Puts u into the scene: the input ``index`` of a ``kind`` point becomes v0 (1 + u)."""
+
+    kind: str
+    index: int
+
+    def __call__(self, u, args):
+        values, disc = args
+        values = values.at[self.index].multiply(1.0 + u)
+        G, M, D = groups_of(self.kind, values)
+        return DipoleMagnet(G, M, D, 0.0), disc
+
+
+def _observables(w, scene_at, base, disc: PlanarDiscretisation):
+    """(u, alpha, q, tip, dF/dalpha, d2F/dq2, two smallest eigenvalues) at one point."""
+    m = disc.size
+    x, phi, alpha, u = split(w, m)
+    args = scene_at(u, (base, disc))
+    d_alpha, d_qq, _ = fold_coefficients(ALPHA_MODEL, x, alpha, phi, args, disc.mean)
+    eigs = jnp.linalg.eigvalsh(ALPHA_MODEL.hessian(x, alpha, args))[:2]
+    return u, alpha, disc.mean(x), tip_angle(x, disc), d_alpha, d_qq, eigs
+
+
+def _curves_program(w0, directions, base, disc, opts, capacity, vary):
+    run = lambda w, d: fold_curve_run(ALPHA_MODEL, vary, w, (base, disc), opts, capacity, d)
+    runs = jax.vmap(run)(w0, directions)
+    observe = jax.vmap(jax.vmap(lambda w: _observables(w, vary, base, disc)))
+    return runs, observe(runs.w)
+
+
+_curves = StoredProgram("fold-curves", _curves_program, static_argnames=("capacity", "vary"))
+
+
+#: The scalar events a fold-curve point is refined to: the cusp (F_qq = 0), or a given alpha.
+EVENTS = {"cusp": quadratic_coefficient, "alpha": parameter_lam}
+
+
+def _event_program(w0, base, disc, target, vary, kind):
+    res = event_solve(ALPHA_MODEL, vary, w0, (base, disc), EVENTS[kind], target, tol=1e-13)
+    report = _observables(res.x, vary, base, disc)
+    cubic = cubic_coefficient(res.x, _mean_row(disc), ALPHA_MODEL, vary, (base, disc))
+    return res, report, cubic
+
+
+_event = StoredProgram("fold-curve-event", _event_program, static_argnames=("vary", "kind"))
+
+
+def _mean_row(disc: PlanarDiscretisation):
+    """c with c . theta = int theta (the reduced coordinate q)."""
+    return disc.quad_weights @ disc.to_quad
+
+
+@dataclasses.dataclass(frozen=True)
+class CurvePoint:
+    """A refined point of a fold curve: the cusp, or where a fold reaches alpha = 0 or 90."""
+
+    kind: str  # "cusp", "alpha = 90 deg", "alpha = 0 deg"
+    vary: str
+    value: float
+    alpha_deg: float
+    q: float
+    tip_deg: float
+    dF_dalpha: float
+    d2F_dq2: float
+    cubic_coefficient: float
+    hessian_smallest: tuple[float, float]
+    converged: bool
+    residual_norm: float
+    iterations: int
+    state: np.ndarray  # (theta, phi, alpha, u), u relative to the starting point's value
+
+    def as_dict(self) -> dict:
+        return {self.vary: self.value, "alpha_deg": self.alpha_deg, "q": self.q,
+                "tip_deg": self.tip_deg, "dF_dalpha": self.dF_dalpha, "d2F_dq2": self.d2F_dq2,
+                "cubic_coefficient": self.cubic_coefficient,
+                "hessian_smallest_eigenvalues": list(self.hessian_smallest),
+                "converged": self.converged, "residual_norm": self.residual_norm,
+                "iterations": self.iterations}
+
+
+@dataclasses.dataclass(frozen=True)
+class FoldCurve:
+    """One traced fold curve (host arrays, valid points only), cut at its first cusp."""
+
+    start: str  # "lower" or "upper": the fold it starts from
+    value: np.ndarray  # the varied input along the curve
+    alpha_deg: np.ndarray
+    q: np.ndarray
+    tip_deg: np.ndarray
+    dF_dalpha: np.ndarray
+    d2F_dq2: np.ndarray
+    hessian_smallest: np.ndarray  # (n, 2)
+    newton_iterations: np.ndarray
+    residual_norm: np.ndarray
+    status: str
+    reaches_cusp: bool
+
+    def columns(self) -> dict[str, np.ndarray]:
+        return {"value": self.value, "alpha_deg": self.alpha_deg, "q": self.q,
+                "tip_deg": self.tip_deg, "dF_dalpha": self.dF_dalpha, "d2F_dq2": self.d2F_dq2,
+                "eig0": self.hessian_smallest[:, 0], "eig1": self.hessian_smallest[:, 1],
+                "newton_iterations": self.newton_iterations,
+                "residual_norm": self.residual_norm}
+
+
+@dataclasses.dataclass(frozen=True)
+class FoldCurves:
+    """Both fold curves from a design point, the cusp (if one lies in the range) and where a
+    fold leaves alpha in (0, 90] degrees."""
+
+    point: DesignPoint
+    vary: str
+    to: float
+    n: int
+    curves: list[FoldCurve]
+    cusp: CurvePoint | None
+    events: list[CurvePoint]
+
+    @property
+    def converged(self) -> bool:
+        good = all(c.status in (CURVE_STATUS[1], CURVE_STATUS[5]) for c in self.curves)
+        return good and (self.cusp is None or self.cusp.converged) and all(
+            e.converged for e in self.events)
+
+    def as_dict(self) -> dict:
+        return {"vary": self.vary, "to": self.to, "n": self.n, "point": self.point.as_dict(),
+                "cusp": None if self.cusp is None else self.cusp.as_dict(),
+                "events": [e.kind for e in self.events],
+                "event_points": [e.as_dict() for e in self.events],
+                "curves": {c.start: {k: v.tolist() for k, v in c.columns().items()}
+                           | {"status": c.status, "reaches_cusp": c.reaches_cusp}
+                           for c in self.curves},
+                "converged": self.converged}
+
+
+#: Fold-curve step control: u is the relative change of the varied input; alpha is bounded
+#: to [-90, 180] degrees (a fold leaving (0, 90] is reported, and followed a little further).
+CURVE_OPTIONS = FoldCurveOptions(ds=0.01, ds_min=1e-9, ds_max=0.05, lam_min=-math.pi / 2,
+                                 lam_max=math.pi, tol=1e-12)
+CURVE_CAPACITY = 512
+
+
+def valid_range(point: DesignPoint, name: str) -> tuple[float, float]:
+    """The open interval of the input ``name`` (others fixed) where the point is valid:
+    positive inputs, and a magnet that clears the rod (D > 1 + a / L)."""
+    i = point.index(name)
+    v = point.values
+    if point.kind == "groups":
+        if name == "D":
+            return 1.0 + point.magnet_radius, math.inf
+        return (0.0, math.inf)
+    L, d_magnet, R = v[4], v[7], v[8]
+    if name == "track-radius":
+        return L + 0.5 * d_magnet, math.inf
+    if name == "length":
+        return 0.0, R - 0.5 * d_magnet
+    if name == "magnet-diameter":
+        return 0.0, 2.0 * (R - L)
+    del i
+    return 0.0, math.inf
+
+
+def check_target(point: DesignPoint, name: str, to: float) -> float:
+    """Validate the end value of a fold curve against ``valid_range``."""
+    lo, hi = valid_range(point, name)
+    v0 = point.values[point.index(name)]
+    if not math.isfinite(to) or not lo < to < hi:
+        raise ParameterError(f"to: {name} must stay in ({lo:.6g}, {hi:.6g}) (positive inputs, "
+                             f"a magnet that clears the rod), got {to!r}")
+    if to == v0:
+        raise ParameterError(f"to: must differ from the starting {name} = {v0!r}")
+    return float(to)
+
+
+def _start(point: DesignPoint, n: int):
+    G, M, D = point.groups()
+    report = locate_folds(DipoleMagnet(G, M, D, 0.0), n=n)
+    kinds = {f.kind: f for f in report.folds}
+    if "lower" not in kinds or "upper" not in kinds or not report.converged:
+        raise ParameterError(
+            f"no fold to start from: the rod at G = {G:.6g}, M = {M:.6g}, D = {D:.6g} has "
+            f"{len(report.folds)} converged fold(s) with alpha in (0, 90] degrees, not the "
+            "lower and upper pair (it is not bistable there; start from a bistable point)")
+    folds = [kinds["lower"], kinds["upper"]]
+    w0 = np.stack([np.concatenate([f.theta, f.null_vector, [math.radians(f.alpha_deg), 0.0]])
+                   for f in folds])
+    return w0, folds
+
+
+def _run(point, name, u_lo, u_hi, w0, directions, n, max_cusps):
+    disc = planar_discretisation(n, "clamped")
+    vary = Vary(point.kind, point.index(name))
+    base = jnp.asarray(point.values, jnp.float64)
+    opts = CURVE_OPTIONS._replace(u_min=u_lo, u_max=u_hi, max_cusps=max_cusps)
+    runs, observed = jax.device_get(_curves(jnp.asarray(w0), jnp.asarray(directions), base,
+                                            disc, opts, CURVE_CAPACITY, vary))
+    return runs, observed, disc, vary, base
+
+
+def _refine(kind, w, target, disc, vary, base, name, v0, label) -> CurvePoint:
+    res, rep, cubic = jax.device_get(_event(jnp.asarray(w), base, disc, target, vary, kind))
+    u, alpha, q, tip, d_alpha, d_qq, eigs = rep
+    return CurvePoint(kind=label, vary=name, value=float(v0 * (1.0 + u)),
+                      alpha_deg=math.degrees(float(alpha)), q=float(q),
+                      tip_deg=math.degrees(float(tip)), dF_dalpha=float(d_alpha),
+                      d2F_dq2=float(d_qq), cubic_coefficient=float(cubic),
+                      hessian_smallest=(float(eigs[0]), float(eigs[1])),
+                      converged=bool(res.converged), residual_norm=float(res.residual_norm),
+                      iterations=int(res.iterations), state=np.asarray(res.x))
+
+
+def _sign_changes(values):
+    s = np.sign(values)
+    return np.nonzero(s[:-1] * s[1:] < 0)[0]
+
+
+def _curve_from(run, observed, i, start, v0) -> tuple[FoldCurve, int | None]:
+    k = int(run.num_points[i])
+    u, alpha, q, tip, d_alpha, d_qq, eigs = (np.asarray(o[i][:k]) for o in observed)
+    change = _sign_changes(run.cusp_test[i][:k])
+    cut = int(change[0]) + 1 if change.size else k
+    curve = FoldCurve(
+        start=start, value=v0 * (1.0 + u[:cut]), alpha_deg=np.degrees(alpha[:cut]),
+        q=q[:cut], tip_deg=np.degrees(tip[:cut]), dF_dalpha=d_alpha[:cut],
+        d2F_dq2=d_qq[:cut], hessian_smallest=eigs[:cut],
+        newton_iterations=np.asarray(run.newton_iterations[i][:cut]),
+        residual_norm=np.asarray(run.residual_norm[i][:cut]),
+        status=CURVE_STATUS[int(run.status[i])], reaches_cusp=bool(change.size))
+    near = None
+    if change.size:
+        j = int(change[0])
+        t = run.cusp_test[i]
+        near = j if abs(t[j]) < abs(t[j + 1]) else j + 1
+    return curve, near
+
+
+def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) -> FoldCurves:
+    """Both fold curves of ``point`` as the input ``vary`` goes to ``to``, the cusp where they
+    meet (if it lies in the range) and where a fold leaves alpha in (0, 90] degrees."""
+    i = point.index(vary)
+    to = check_target(point, vary, to)
+    v0 = point.values[i]
+    w0, _ = _start(point, n)
+    u_to = to / v0 - 1.0
+    lo, hi = sorted((0.0, u_to))
+    direction = math.copysign(1.0, u_to)
+    # a curve that passes the cusp comes back as the other fold: stop it just past the start
+    margin = 1e-3 * abs(u_to)
+    runs, observed, disc, vary_map, base = _run(point, vary, lo - margin, hi + margin, w0,
+                                                [direction, direction], n, 1.0)
+    curves, cusp, events = [], None, []
+    for i_run, start in enumerate(("lower", "upper")):
+        curve, near = _curve_from(runs, observed, i_run, start, v0)
+        curves.append(curve)
+        if near is not None and cusp is None:
+            cusp = _refine("cusp", runs.w[i_run][near], 0.0, disc, vary_map, base, vary, v0,
+                           "cusp")
+        events += _alpha_events(runs, observed, i_run, disc, vary_map, base, vary, v0,
+                                len(curve.value))
+    return FoldCurves(point=point, vary=vary, to=to, n=n, curves=curves, cusp=cusp,
+                      events=events)
+
+
+def _alpha_events(runs, observed, i, disc, vary_map, base, vary, v0, k) -> list[CurvePoint]:
+    alpha = np.asarray(observed[1][i][:k])
+    events = []
+    for target, label in ((math.pi / 2, "alpha = 90 deg"), (0.0, "alpha = 0 deg")):
+        for j in _sign_changes(alpha - target):
+            near = j if abs(alpha[j] - target) < abs(alpha[j + 1] - target) else j + 1
+            events.append(_refine("alpha", runs.w[i][near], target, disc, vary_map, base,
+                                  vary, v0, label))
+    return events
+
+
+#: How far ``find_cusp`` looks: the varied input within a factor 20 of its start.
+CUSP_SEARCH = (-0.95, 19.0)
+
+
+def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> CurvePoint:
+    """The cusp reached from ``point`` by varying ``vary``: the lower fold is followed both
+    ways (within the valid range and a factor 20 of the start) to the nearest sign change of
+    d2F/dq2, refined by Newton on the cusp system. Raises ``ParameterError`` if there is no
+    fold to start from, and returns ``converged=False`` (with kind "none") if no cusp is
+    found in the search range."""
+    i = point.index(vary)
+    v0 = point.values[i]
+    lo, hi = valid_range(point, vary)
+    # stop short of the magnet touching the rod (the clearance's last 1 %)
+    u_lo = max(CUSP_SEARCH[0], (lo / v0 - 1.0) * 0.99 if lo > 0 else CUSP_SEARCH[0])
+    u_hi = min(CUSP_SEARCH[1], (hi / v0 - 1.0) * 0.99 if math.isfinite(hi) else CUSP_SEARCH[1])
+    w0, _ = _start(point, n)
+    runs, observed, disc, vary_map, base = _run(point, vary, u_lo, u_hi, w0[[0, 0]],
+                                                [1.0, -1.0], n, 1.0)
+    found = []
+    for i_run in (0, 1):
+        curve, near = _curve_from(runs, observed, i_run, "lower", v0)
+        if near is not None:
+            found.append((np.sum(np.abs(np.diff(curve.value))), i_run, near))
+    if not found:
+        return CurvePoint("none", vary, math.nan, math.nan, math.nan, math.nan, math.nan,
+                          math.nan, math.nan, (math.nan, math.nan), False, math.nan, 0,
+                          np.full(2 * planar_discretisation(n).size + 2, np.nan))
+    _, i_run, near = min(found)
+    return _refine("cusp", runs.w[i_run][near], 0.0, disc, vary_map, base, vary, v0, "cusp")
+
+
+def cusp_location(point: DesignPoint, vary: str, cusp: CurvePoint, n: int = DEFAULT_N):
+    """The cusp as a differentiable function of the design point's values:
+    ``f(values) -> (value of vary, alpha in radians, Newton stats)``, by implicit
+    differentiation of the cusp system about the converged ``cusp`` found from ``point``
+    (``jaxrod.solvers.fold_curve.differentiable_cusp``). Compose it with ``jax.jacfwd`` for
+    the cusp's sensitivity to the other inputs (the entry of ``vary`` itself has none)."""
+    i = point.index(vary)
+    disc = planar_discretisation(n, "clamped")
+    vary_map = Vary(point.kind, i)
+    m = disc.size
+    w_start = jnp.asarray(cusp.state)
+
+    def location(values):
+        w, stats = differentiable_cusp(ALPHA_MODEL, vary_map, w_start, (values, disc))
+        return values[i] * (1.0 + w[2 * m + 1]), w[2 * m], stats
+
+    return location

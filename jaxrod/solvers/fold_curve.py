@@ -1,0 +1,288 @@
+"""Folds in two parameters: pseudo-arclength continuation of the Moore-Spence system, and
+the cusp where a fold curve's quadratic coefficient vanishes.
+
+A fold of the equilibria F(x, lam; u) = grad_x E = 0 solves the Moore-Spence system
+(``jaxrod.solvers.folds``) R(z; u) = [F; H phi; l . phi - 1] = 0, z = (x, phi, lam): 2m + 1
+equations. With the second parameter u free, the folds form a curve w(s) = (z(s), u(s)),
+followed by pseudo-arclength (Keller) with the weighted inner product
+<a, b> = (a_x . b_x + a_phi . b_phi) / m + a_lam b_lam + a_u b_u:
+
+    predictor   w_p = w_k + ds t_k
+    corrector   R(w) = 0,  <t_k, w - w_p> = 0                    (Newton, exact Jacobian)
+    tangent     [R_z  R_u; t_k^T W] t = [0; 1],   t_{k+1} = t / |t|
+
+R_z is the Moore-Spence Jacobian (from the energy's assembled derivatives), R_u one forward-
+mode tangent of R in u. The normalisation vector l is re-set to phi_k / |phi_k|^2 at every
+accepted point (phi_k still satisfies l . phi = 1, so the curve stays continuous while the
+null vector rotates). Turning points of the curve in u are regular points of this system,
+so the curve is followed round them.
+
+Along the curve, with phi scaled to c . phi = 1 (c the linear functional of the reduced
+coordinate, q = c . x), the reduced function F(q, lam; u) of the Lyapunov-Schmidt reduction
+has F_q = 0 and the quadratic coefficient
+
+    F_qq = D^3E[phi, phi, phi].
+
+At a cusp F_qq = 0: the two fold curves of one parameter meet and the hysteresis between
+them closes. The cusp is a regular solution of the square system (2m + 2 unknowns w)
+
+    R(z; u) = 0,      C(w) = D^3E[phi, phi, phi] = 0,
+
+(``event_residual`` with ``quadratic_coefficient``), refined by Newton from the recorded
+point next to the sign change of F_qq, differentiable in the remaining parameters
+(``differentiable_cusp``). The same Newton locates where a fold curve reaches a given lam
+(``event_solve`` with ``parameter_lam``). The cusp's normal form is
+F = F_lam (lam - lam_c) + F_qu (u - u_c) q + F_qqq q^3 / 6 + ..., with the cubic
+coefficient (``cubic_coefficient``)
+
+    F_qqq = D^4E[phi, phi, phi, phi] + 3 D^3E[phi, phi, w2],
+    [H c; c^T 0] [w2; s] = [-D^3E[phi, phi]; 0]
+
+(the reduced function is the multiplier in grad E(x(q)) = F(q) c, c . x(q) = q, at fixed
+(lam, u); three q-derivatives dotted with phi give F_qqq, and D^3E[phi, phi] . phi = 0 at
+the cusp makes the bordered system for w2 = x''(q) solvable).
+
+The run is one ``lax.while_loop`` over fixed-capacity arrays (NaN padded), compiled once per
+(energy model, args map, problem size, capacity). It stops at the bounds of u or lam, when
+full, or when the step collapses.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from jaxrod.derivatives import EnergyModel
+from jaxrod.solvers.continuation import (
+    CAPACITY_FULL,
+    REACHED_BOUND,
+    RUNNING,
+    STATUS_MESSAGES,
+    STEP_TOO_SMALL,
+)
+from jaxrod.solvers.folds import moore_spence_linearisation, moore_spence_residual
+from jaxrod.solvers.newton import implicit_newton, newton
+
+CUSP_PASSED = 5
+CURVE_STATUS = STATUS_MESSAGES | {
+    CUSP_PASSED: "passed max_cusps cusps",
+    REACHED_BOUND: "reached a bound of the parameter or of lam"}
+
+#: ``args_at(u, args) -> model args``: how the second parameter enters the energy (a
+#: hashable, module-level function or frozen dataclass, so compiled programs are reused).
+ArgsMap = Callable[[jax.Array, Any], Any]
+
+
+class FoldCurveOptions(NamedTuple):
+    """Step control and bounds (all traced; ``capacity`` is passed separately, static)."""
+
+    ds: float = 0.02
+    ds_min: float = 1e-8
+    ds_max: float = 0.05
+    growth: float = 1.5
+    u_min: float = -jnp.inf
+    u_max: float = jnp.inf
+    lam_min: float = -jnp.inf
+    lam_max: float = jnp.inf
+    tol: float = 1e-12
+    max_cusps: float = jnp.inf
+
+
+class RawFoldCurve(NamedTuple):
+    """Device arrays of one fold-curve run (first ``num_points`` rows valid, NaN beyond)."""
+
+    w: jax.Array  # (capacity, 2m + 2): (x, phi, lam, u)
+    tangent: jax.Array  # (capacity, 2m + 2)
+    cusp_test: jax.Array  # (capacity,): D^3E[phi, phi, phi] / |phi|^3
+    newton_iterations: jax.Array
+    residual_norm: jax.Array
+    num_points: jax.Array
+    status: jax.Array
+    rejected_steps: jax.Array
+
+
+def split(w, m):
+    """(x, phi, lam, u) of a fold-curve point."""
+    return w[:m], w[m:2 * m], w[2 * m], w[2 * m + 1]
+
+
+def _weights(m, dtype):
+    return jnp.concatenate([jnp.full(2 * m, 1.0 / m, dtype), jnp.ones(2, dtype)])
+
+
+def fold_linearisation(w, ell, model: EnergyModel, args_at: ArgsMap, args):
+    """(R(w), [R_z R_u]) at w = (x, phi, lam, u): the Moore-Spence residual and its Jacobian
+    in all 2m + 2 unknowns."""
+    z, u = w[:-1], w[-1]
+    residual = lambda v: moore_spence_residual(z, (model, ell, args_at(v, args)))
+    R, R_u = jax.jvp(residual, (u,), (jnp.ones_like(u),))
+    _, R_z = moore_spence_linearisation(z, (model, ell, args_at(u, args)))
+    return R, jnp.hstack([R_z, R_u[:, None]])
+
+
+def _corrector(w, data):
+    w_pred, t, ell, model, args_at, args = data
+    R, J = fold_linearisation(w, ell, model, args_at, args)
+    W = _weights(ell.shape[0], w.dtype)
+    return (jnp.append(R, jnp.dot(W * t, w - w_pred)),
+            jnp.vstack([J, (W * t)[None, :]]))
+
+
+def _tangent(J, t_prev, W):
+    rhs = jnp.zeros(J.shape[1], J.dtype).at[-1].set(1.0)
+    t = jnp.linalg.solve(jnp.vstack([J, (W * t_prev)[None, :]]), rhs)
+    return t / jnp.sqrt(jnp.dot(W * t, t))
+
+
+def _unit_ell(phi):
+    return phi / jnp.dot(phi, phi)
+
+
+def _cusp_test(J, phi):
+    """D^3E[phi, phi, phi] / |phi|^3 from the Moore-Spence Jacobian's D^3E[phi] block."""
+    m = phi.shape[0]
+    return phi @ J[m:2 * m, :m] @ phi / jnp.dot(phi, phi) ** 1.5  # = quadratic_coefficient
+
+
+class _State(NamedTuple):
+    w: jax.Array
+    t: jax.Array
+    ell: jax.Array
+    ds: jax.Array
+    k: jax.Array
+    rejected: jax.Array
+    cusps: jax.Array
+    status: jax.Array
+    out: RawFoldCurve
+
+
+def fold_curve_run(model: EnergyModel, args_at: ArgsMap, w0, args, opts: FoldCurveOptions,
+                   capacity: int, direction) -> RawFoldCurve:
+    """Follow the fold curve through the fold w0 = (x, phi, lam, u) (traceable; ``capacity``
+    static; vmappable over w0 and ``direction``, the sign of du on the first step).
+
+    w0 must be a converged fold (its phi any nonzero null vector).
+    """
+    m = (w0.shape[0] - 2) // 2
+    W = _weights(m, w0.dtype)
+    ell0 = _unit_ell(w0[m:2 * m])
+    R0, J0 = fold_linearisation(w0, ell0, model, args_at, args)
+    e_u = jnp.zeros_like(w0).at[-1].set(1.0)
+    t0 = _tangent(J0, e_u, W)
+    t0 = jnp.where(t0[-1] * direction < 0, -t0, t0)
+    nan = jnp.full(capacity, jnp.nan, w0.dtype)
+    out = RawFoldCurve(
+        w=jnp.full((capacity, w0.shape[0]), jnp.nan, w0.dtype).at[0].set(w0),
+        tangent=jnp.full((capacity, w0.shape[0]), jnp.nan, w0.dtype).at[0].set(t0),
+        cusp_test=nan.at[0].set(_cusp_test(J0, w0[m:2 * m])),
+        newton_iterations=jnp.full(capacity, -1).at[0].set(0),
+        residual_norm=nan.at[0].set(jnp.max(jnp.abs(R0))), num_points=jnp.asarray(0),
+        status=jnp.asarray(RUNNING), rejected_steps=jnp.asarray(0))
+
+    def step(s: _State) -> _State:
+        w_pred = s.w + s.ds * s.t
+        res = newton(None, w_pred, (w_pred, s.t, s.ell, model, args_at, args), tol=opts.tol,
+                     linearise=_corrector)
+        ell = _unit_ell(res.x[m:2 * m])
+        _, J = fold_linearisation(res.x, ell, model, args_at, args)
+        t_new = _tangent(J, s.t, W)
+        accept = res.converged & (jnp.dot(W * t_new, s.t) > 0.9) & jnp.all(jnp.isfinite(t_new))
+        k = s.k + jnp.where(accept, 1, 0)
+        test = _cusp_test(J, res.x[m:2 * m])
+        cusps = s.cusps + jnp.where(accept & (test * s.out.cusp_test[s.k] < 0), 1, 0)
+
+        def record(o: RawFoldCurve):
+            return o._replace(w=o.w.at[k].set(res.x), tangent=o.tangent.at[k].set(t_new),
+                              cusp_test=o.cusp_test.at[k].set(test),
+                              newton_iterations=o.newton_iterations.at[k].set(res.iterations),
+                              residual_norm=o.residual_norm.at[k].set(res.residual_norm))
+
+        out = jax.lax.cond(accept, record, lambda o: o, s.out)
+        ds = jnp.where(accept, jnp.where(res.iterations <= 3,
+                                         jnp.minimum(s.ds * opts.growth, opts.ds_max), s.ds),
+                       0.5 * s.ds)
+        w = jnp.where(accept, res.x, s.w)
+        lam, u = w[2 * m], w[2 * m + 1]
+        outside = (u > opts.u_max) | (u < opts.u_min) | (lam > opts.lam_max) | (lam < opts.lam_min)
+        status = jnp.where(accept & outside, REACHED_BOUND,
+                           jnp.where(cusps >= opts.max_cusps, CUSP_PASSED,
+                                     jnp.where(k >= capacity - 1, CAPACITY_FULL,
+                                               jnp.where(ds < opts.ds_min, STEP_TOO_SMALL,
+                                                         RUNNING))))
+        return _State(w, jnp.where(accept, t_new, s.t), jnp.where(accept, ell, s.ell), ds, k,
+                      s.rejected + jnp.where(accept, 0, 1), cusps, status, out)
+
+    init = _State(w0, t0, ell0, jnp.asarray(opts.ds, w0.dtype), jnp.asarray(0), jnp.asarray(0),
+                  jnp.asarray(0), jnp.asarray(RUNNING), out)
+    final = jax.lax.while_loop(lambda s: s.status == RUNNING, step, init)
+    return final.out._replace(num_points=final.k + 1, status=final.status,
+                              rejected_steps=final.rejected)
+
+
+def quadratic_coefficient(w, model: EnergyModel, args_at: ArgsMap, args):
+    """D^3E[phi, phi, phi] / |phi|^3 at w (F_qq up to a positive factor; its zero is the
+    cusp)."""
+    m = (w.shape[0] - 2) // 2
+    x, phi, lam, u = split(w, m)
+    return (phi @ model.third(x, lam, args_at(u, args), phi) @ phi
+            / jnp.dot(phi, phi) ** 1.5)
+
+
+def parameter_lam(w, model, args_at, args):
+    """lam at w (the event of a fold curve reaching a given lam)."""
+    return w[(w.shape[0] - 2) // 2 * 2]
+
+
+def event_residual(w, data):
+    """[R(z; u); event(w) - target] for w = (x, phi, lam, u), data = (ell, model, args_at,
+    args, event, target): a point of the fold curve where ``event`` (a scalar function of
+    (w, model, args_at, args)) takes the value ``target``. With ``quadratic_coefficient`` and
+    target 0 it is the cusp system (module docstring)."""
+    ell, model, args_at, args, event, target = data
+    R = moore_spence_residual(w[:-1], (model, ell, args_at(w[-1], args)))
+    return jnp.append(R, event(w, model, args_at, args) - target)
+
+
+def _event_linearisation(w, data):
+    ell, model, args_at, args, event, target = data
+    R, J = fold_linearisation(w, ell, model, args_at, args)
+    g, dg = jax.value_and_grad(event)(w, model, args_at, args)
+    return jnp.append(R, g - target), jnp.vstack([J, dg[None, :]])
+
+
+def event_solve(model: EnergyModel, args_at: ArgsMap, w0, args, event=quadratic_coefficient,
+                target=0.0, tol: float = 1e-13):
+    """Newton on ``event_residual`` from the fold-curve point w0 (traceable); the default is
+    the cusp."""
+    m = (w0.shape[0] - 2) // 2
+    ell = _unit_ell(w0[m:2 * m])
+    return newton(None, w0, (ell, model, args_at, args, event, target), tol=tol,
+                  linearise=_event_linearisation)
+
+
+def differentiable_cusp(model: EnergyModel, args_at: ArgsMap, w0, args, tol: float = 1e-13):
+    """(w, stats): the cusp, differentiable in ``args`` by implicit differentiation of the cusp
+    system (one solve with its Jacobian per tangent), and the Newton statistics (converged
+    as 0/1, residual norm, iterations)."""
+    m = (w0.shape[0] - 2) // 2
+    ell = jax.lax.stop_gradient(_unit_ell(w0[m:2 * m]))
+    data = lambda p: (ell, model, args_at, p, quadratic_coefficient, 0.0)
+    return implicit_newton(lambda w, p: event_residual(w, data(p)), jax.lax.stop_gradient(w0),
+                           args, tol, linearise=lambda w, p: _event_linearisation(w, data(p)))
+
+
+def cubic_coefficient(w, c, model: EnergyModel, args_at: ArgsMap, args):
+    """F_qqq at a cusp w, with phi scaled to c . phi = 1 (module docstring)."""
+    m = c.shape[0]
+    x, phi, lam, u = split(w, m)
+    phi = phi / jnp.dot(c, phi)
+    a = args_at(u, args)
+    H = model.hessian(x, lam, a)
+    g2 = model.third(x, lam, a, phi) @ phi
+    bordered = jnp.block([[H, c[:, None]], [c[None, :], jnp.zeros((1, 1), H.dtype)]])
+    w2 = jnp.linalg.solve(bordered, jnp.append(-g2, 0.0))[:m]
+    d4 = jax.jvp(lambda y: phi @ model.third(y, lam, a, phi) @ phi, (x,), (phi,))[1]
+    return d4 + 3.0 * jnp.dot(g2, w2)
