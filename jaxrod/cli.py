@@ -1,5 +1,5 @@
 """Command-line front end: ``jaxrod greenhill | folds | branch | sweep | fit | certify |
-outofplane | track | reproduce`` (``jaxrod -h`` lists them).
+outofplane | track | cusp | foldcurve | reproduce`` (``jaxrod -h`` lists them).
 
 Every command prints a human-readable report, or one JSON object with ``--json``. Invalid
 input exits with status 2 and a one-line message naming the parameter.
@@ -16,8 +16,10 @@ from pathlib import Path
 
 from jaxrod.params import (
     EXPERIMENTS,
+    GROUP_NAMES,
     NDFEB_MAGNET,
     NICKEL,
+    PHYSICAL_NAMES,
     Magnet,
     ParameterError,
     Rod,
@@ -130,36 +132,151 @@ def cmd_greenhill(args) -> int:
     return 0
 
 
+def _magnet_physical_from_args(args) -> tuple[Rod, Magnet] | None:
+    """(rod, magnet) from --preset/--E/--diameter/--length/--magnet-diameter/--track-radius,
+    or None when only the groups are given."""
+    physical = any(v is not None for v in (args.preset, args.E, args.length, args.diameter,
+                                            args.magnet_diameter, args.track_radius))
+    if not physical:
+        return None
+    if any(v is not None for v in (args.G, args.M, args.D)):
+        raise ParameterError("G/M/D: give either the groups --G --M --D or physical inputs "
+                             "(--preset/--E/--length/...), not both")
+    E = args.E if args.E is not None else NICKEL.youngs_modulus
+    rod, _ = preset(args.preset or "permanent-magnet", E)
+    if args.diameter is not None:
+        rod = Rod(rod.material, args.diameter, rod.length)
+    if args.length is not None:
+        rod = rod.with_length(args.length)
+    magnet = Magnet(
+        diameter=NDFEB_MAGNET.diameter if args.magnet_diameter is None else args.magnet_diameter,
+        saturation_magnetisation=NDFEB_MAGNET.saturation_magnetisation,
+        track_radius=NDFEB_MAGNET.track_radius if args.track_radius is None
+        else args.track_radius)
+    return rod, magnet
+
+
+def _magnet_groups_from_args(args):
+    """(G, M, D, magnet radius a/L or None) from the groups or the physical inputs."""
+    physical = _magnet_physical_from_args(args)
+    if physical is not None:
+        rod, magnet = physical
+        return rod.G, rod.M(magnet), rod.D(magnet), 0.5 * magnet.diameter / rod.length
+    missing = [k for k in ("G", "M", "D") if getattr(args, k) is None]
+    if missing:
+        raise ParameterError(f"{'/'.join(missing)}: give --G, --M and --D (or physical "
+                             "inputs such as --preset permanent-magnet --E 200e9)")
+    return args.G, args.M, args.D, args.magnet_radius
+
+
 def _magnet_scene_from_args(args):
     """(scene, description dict) from --G/--M/--D or physical inputs."""
     from jaxrod.analysis.magnet import make_scene
 
-    physical = any(v is not None for v in (args.preset, args.E, args.length, args.diameter,
-                                            args.magnet_diameter, args.track_radius))
-    if physical:
-        if any(v is not None for v in (args.G, args.M, args.D)):
-            raise ParameterError("G/M/D: give either the groups --G --M --D or physical inputs "
-                                 "(--preset/--E/--length/...), not both")
-        E = args.E if args.E is not None else NICKEL.youngs_modulus
-        rod, _ = preset(args.preset or "permanent-magnet", E)
-        if args.diameter is not None:
-            rod = Rod(rod.material, args.diameter, rod.length)
-        if args.length is not None:
-            rod = rod.with_length(args.length)
-        magnet = Magnet(
-            diameter=args.magnet_diameter or NDFEB_MAGNET.diameter,
-            saturation_magnetisation=NDFEB_MAGNET.saturation_magnetisation,
-            track_radius=args.track_radius or NDFEB_MAGNET.track_radius)
-        G, M, D = rod.G, rod.M(magnet), rod.D(magnet)
-        radius = 0.5 * magnet.diameter / rod.length
-    else:
-        missing = [k for k in ("G", "M", "D") if getattr(args, k) is None]
-        if missing:
-            raise ParameterError(f"{'/'.join(missing)}: give --G, --M and --D (or physical "
-                                 "inputs such as --preset permanent-magnet --E 200e9)")
-        G, M, D, radius = args.G, args.M, args.D, args.magnet_radius
+    G, M, D, radius = _magnet_groups_from_args(args)
     scene = make_scene(G, M, D, radius)
     return scene, {"G": G, "M": M, "D": D}
+
+
+def _design_point_from_args(args):
+    from jaxrod.analysis.fold_curves import DesignPoint
+
+    physical = _magnet_physical_from_args(args)
+    if physical is not None:
+        return DesignPoint.from_physical(*physical)
+    G, M, D, radius = _magnet_groups_from_args(args)
+    return DesignPoint.from_groups(G, M, D, radius)
+
+
+def _fmt_cusp(c) -> str:
+    return (f"cusp: {c.vary} = {c.value:.12g}  alpha* = {c.alpha_deg:.10f} deg  "
+            f"q* = {c.q:.10f}  tip* = {c.tip_deg:.10f} deg  d3F/dq3 = {c.cubic_coefficient:.8g}"
+            f"  dF/dalpha = {c.dF_dalpha:.6g}")
+
+
+def cmd_cusp(args) -> int:
+    from jaxrod.analysis.fold_curves import find_cusp
+
+    point = _design_point_from_args(args)
+    point.index(args.vary)
+    cusp = find_cusp(point, args.vary, n=args.n)
+    found = cusp.kind == "cusp"
+    out = {"vary": args.vary, "cusp": cusp.as_dict() if found else None,
+           "converged": bool(found and cusp.converged), "n": args.n,
+           "point": point.as_dict()}
+    if not found:
+        out["message"] = (f"no cusp found varying {args.vary} within a factor 20 of its "
+                          "starting value (the fold curves leave the valid range first)")
+    if args.json:
+        print(json.dumps(out))
+    else:
+        G, M, D = point.groups()
+        print(f"from G = {G:.8g}, M = {M:.8g}, D = {D:.10g} (N = {args.n}), varying "
+              f"{args.vary}")
+        print(_fmt_cusp(cusp) if found else out["message"])
+        if found:
+            print(f"converged: {cusp.converged} (residual {cusp.residual_norm:.2g}, "
+                  f"{cusp.iterations} Newton iterations)")
+    return 0 if out["converged"] else 1
+
+
+def cmd_foldcurve(args) -> int:
+    from jaxrod.analysis.fold_curves import fold_curves
+
+    point = _design_point_from_args(args)
+    point.index(args.vary)
+    out_dir = _output_dir(args.out) if args.out else None
+    curves = fold_curves(point, args.vary, args.to, n=args.n)
+    summary = curves.as_dict()
+    if out_dir is not None:
+        _write_fold_curves(curves, out_dir)
+    if args.json:
+        print(json.dumps({k: v for k, v in summary.items() if k != "curves"}
+                         | {"points": {c.start: len(c.value) for c in curves.curves}}))
+    else:
+        G, M, D = point.groups()
+        print(f"from G = {G:.8g}, M = {M:.8g}, D = {D:.10g} (N = {args.n}), {args.vary} -> "
+              f"{args.to:g}")
+        for c in curves.curves:
+            print(f"{c.start} fold: {len(c.value)} points, {args.vary} from {c.value[0]:.8g} "
+                  f"to {c.value[-1]:.8g}, alpha* from {c.alpha_deg[0]:.6f} to "
+                  f"{c.alpha_deg[-1]:.6f} deg ({c.status})")
+        print(_fmt_cusp(curves.cusp) if curves.cusp is not None else
+              f"no cusp between {args.vary} = {point.values[point.index(args.vary)]:.8g} and "
+              f"{args.to:g}: bistable throughout")
+        for e in curves.events:
+            print(f"a fold reaches {e.kind} at {args.vary} = {e.value:.10g}")
+        if out_dir is not None:
+            print(f"wrote {out_dir / 'foldcurve.csv'}, foldcurve.json, foldcurve.png")
+        print(f"converged: {curves.converged}")
+    return 0 if curves.converged else 1
+
+
+def _output_dir(path: str) -> Path:
+    """Create the output directory before any work starts (ParameterError if it cannot be)."""
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".jaxrod-write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as err:
+        raise ParameterError(f"out: cannot write to {path!r} ({err.strerror})") from None
+    return out
+
+
+def _write_fold_curves(curves, out_dir: Path) -> None:
+    from jaxrod.plotting import fold_curve_figure
+
+    with open(out_dir / "foldcurve.csv", "w") as fh:
+        columns = list(curves.curves[0].columns())
+        fh.write("curve," + ",".join(curves.vary if k == "value" else k for k in columns) + "\n")
+        for c in curves.curves:
+            cols = c.columns()
+            for i in range(len(c.value)):
+                fh.write(c.start + "," + ",".join(f"{cols[k][i]:.12g}" for k in columns) + "\n")
+    (out_dir / "foldcurve.json").write_text(json.dumps(curves.as_dict(), indent=1))
+    fold_curve_figure(curves).savefig(out_dir / "foldcurve.png", dpi=120)
 
 
 def cmd_folds(args) -> int:
@@ -573,6 +690,21 @@ def build_parser() -> argparse.ArgumentParser:
     ft.add_argument("--D", type=_float("D"), default=None, help="override track radius / L")
     ft.add_argument("--json", action="store_true")
     ft.set_defaults(func=cmd_fit)
+
+    cu = sub.add_parser("cusp", help="the cusp where the hysteresis ends, varying one input")
+    magnet_inputs(cu)
+    cu.add_argument("--vary", required=True, choices=GROUP_NAMES + PHYSICAL_NAMES,
+                    help="the input that varies (a group, or a physical input with --preset)")
+    cu.set_defaults(func=cmd_cusp)
+
+    fc = sub.add_parser("foldcurve", help="both fold curves in a second input, and the cusp")
+    magnet_inputs(fc)
+    fc.add_argument("--vary", required=True, choices=GROUP_NAMES + PHYSICAL_NAMES,
+                    help="the input that varies (a group, or a physical input with --preset)")
+    fc.add_argument("--to", type=_float("to"), required=True,
+                    help="the value of the varied input where the curves end")
+    fc.add_argument("--out", default=None, help="directory for foldcurve.csv/.json/.png")
+    fc.set_defaults(func=cmd_foldcurve)
 
     r = sub.add_parser("reproduce", help="recompute the paper's tables and verdicts")
     r.add_argument("--out", default=None, help="directory for report.md, report.json, PNGs")

@@ -231,6 +231,16 @@ def check_groups(G=None, A=None, M=None, D=None) -> None:
         check_track_clearance(D)
 
 
+#: The permanent-magnet scene's inputs: its groups, and the physical inputs in the order of
+#: ``jaxrod.analysis.fold_curves.DesignPoint.values``, with their units.
+GROUP_NAMES = ("G", "M", "D")
+PHYSICAL_NAMES = ("E", "density", "gravity", "diameter", "length", "rod-magnetisation",
+                  "remanence", "magnet-diameter", "track-radius")
+UNITS = {"G": "", "M": "", "D": "", "E": "Pa", "density": "kg/m^3", "gravity": "m/s^2",
+         "diameter": "m", "length": "m", "rod-magnetisation": "A/m", "remanence": "A/m",
+         "magnet-diameter": "m", "track-radius": "m"}
+
+
 # --- the paper's data (Table tab:material_para and the experiments' geometry) -------------
 
 #: Young's moduli bracketing the literature range the paper uses for nickel, Pa.

@@ -122,3 +122,35 @@ def conditioning_figure(studies: dict):
     axes[0][0].legend(fontsize=8)
     fig.tight_layout()
     return fig
+
+
+def fold_curve_figure(curves):
+    """Magnet angle of both folds against the varied input (``FoldCurves``): the bistable
+    band between them shaded, the cusp marked, alpha = 90 degrees dotted."""
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    by_start = {c.start: c for c in curves.curves}
+    for start, colour in (("lower", "C0"), ("upper", "C3")):
+        c = by_start[start]
+        label = {"lower": "lower fold (capture)", "upper": "upper fold (release)"}[start]
+        ax.plot(c.value, c.alpha_deg, "-", color=colour, lw=2, label=label)
+    band_x = np.concatenate([by_start["lower"].value, by_start["upper"].value[::-1]])
+    band_y = np.concatenate([by_start["lower"].alpha_deg, by_start["upper"].alpha_deg[::-1]])
+    ax.fill(band_x, band_y, color="0.85", zorder=0, label="bistable (hysteresis)")
+    if curves.cusp is not None:
+        ax.plot(curves.cusp.value, curves.cusp.alpha_deg, "k*", ms=13,
+                label=f"cusp: {curves.vary} = {curves.cusp.value:.8g}")
+    for e in curves.events:
+        ax.plot(e.value, e.alpha_deg, "kx", ms=9)
+    if max(np.max(c.alpha_deg) for c in curves.curves) > 80.0:
+        ax.axhline(90.0, color="0.5", lw=0.8, ls=":")
+    from jaxrod.params import UNITS
+
+    unit = UNITS[curves.vary]
+    ax.set_xlabel(curves.vary + (f" ({unit})" if unit else ""))
+    ax.set_ylabel("magnet angle at the fold, alpha* (deg)")
+    G, M, D = curves.point.groups()
+    ax.set_title(f"folds from G = {G:.4g}, M = {M:.4g}, D = {D:.6g} (N = {curves.n})", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig

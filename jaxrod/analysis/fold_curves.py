@@ -33,6 +33,8 @@ import numpy as np
 from jaxrod.analysis.magnet import DEFAULT_N, locate_folds
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import (
+    GROUP_NAMES,
+    PHYSICAL_NAMES,
     Magnet,
     ParameterError,
     Rod,
@@ -49,19 +51,12 @@ from jaxrod.solvers.fold_curve import (
     event_solve,
     fold_curve_run,
     parameter_lam,
+    parameter_u,
     quadratic_coefficient,
     split,
 )
 from jaxrod.solvers.folds import fold_coefficients
 from jaxrod.stored import StoredProgram
-
-#: The groups, and the physical inputs in the order of ``DesignPoint.values`` (with units).
-GROUP_NAMES = ("G", "M", "D")
-PHYSICAL_NAMES = ("E", "density", "gravity", "diameter", "length", "rod-magnetisation",
-                  "remanence", "magnet-diameter", "track-radius")
-UNITS = {"G": "", "M": "", "D": "", "E": "Pa", "density": "kg/m^3", "gravity": "m/s^2",
-         "diameter": "m", "length": "m", "rod-magnetisation": "A/m", "remanence": "A/m",
-         "magnet-diameter": "m", "track-radius": "m"}
 
 
 def groups_of(kind: str, values):
@@ -181,7 +176,7 @@ _curves = StoredProgram("fold-curves", _curves_program, static_argnames=("capaci
 
 
 #: The scalar events a fold-curve point is refined to: the cusp (F_qq = 0), or a given alpha.
-EVENTS = {"cusp": quadratic_coefficient, "alpha": parameter_lam}
+EVENTS = {"cusp": quadratic_coefficient, "alpha": parameter_lam, "value": parameter_u}
 
 
 def _event_program(w0, base, disc, target, vary, kind):
@@ -284,7 +279,7 @@ class FoldCurves:
 
 #: Fold-curve step control: u is the relative change of the varied input; alpha is bounded
 #: to [-90, 180] degrees (a fold leaving (0, 90] is reported, and followed a little further).
-CURVE_OPTIONS = FoldCurveOptions(ds=0.01, ds_min=1e-9, ds_max=0.05, lam_min=-math.pi / 2,
+CURVE_OPTIONS = FoldCurveOptions(ds=0.01, ds_min=1e-9, ds_max=0.01, lam_min=-math.pi / 2,
                                  lam_max=math.pi, tol=1e-12)
 CURVE_CAPACITY = 512
 
@@ -400,14 +395,35 @@ def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) ->
     curves, cusp, events = [], None, []
     for i_run, start in enumerate(("lower", "upper")):
         curve, near = _curve_from(runs, observed, i_run, start, v0)
-        curves.append(curve)
         if near is not None and cusp is None:
             cusp = _refine("cusp", runs.w[i_run][near], 0.0, disc, vary_map, base, vary, v0,
                            "cusp")
         events += _alpha_events(runs, observed, i_run, disc, vary_map, base, vary, v0,
                                 len(curve.value))
+        if curve.reaches_cusp:
+            curve = _with_end(curve, cusp)
+        elif abs(curve.value[-1] - v0) > abs(to - v0):  # passed `to`: end exactly there
+            k = len(curve.value) - 1
+            end = _refine("value", runs.w[i_run][k], u_to, disc, vary_map, base, vary, v0,
+                          "end")
+            curve = _with_end(dataclasses.replace(curve, **{
+                f.name: getattr(curve, f.name)[:-1] for f in dataclasses.fields(curve)
+                if isinstance(getattr(curve, f.name), np.ndarray)}), end)
+        curves.append(curve)
     return FoldCurves(point=point, vary=vary, to=to, n=n, curves=curves, cusp=cusp,
                       events=events)
+
+
+def _with_end(curve: FoldCurve, end: CurvePoint) -> FoldCurve:
+    """The curve with the refined point ``end`` (the cusp, or the end value) appended."""
+    add = lambda a, v: np.concatenate([a, np.atleast_1d(np.asarray(v, a.dtype))], axis=0)
+    return dataclasses.replace(
+        curve, value=add(curve.value, end.value), alpha_deg=add(curve.alpha_deg, end.alpha_deg),
+        q=add(curve.q, end.q), tip_deg=add(curve.tip_deg, end.tip_deg),
+        dF_dalpha=add(curve.dF_dalpha, end.dF_dalpha), d2F_dq2=add(curve.d2F_dq2, end.d2F_dq2),
+        hessian_smallest=add(curve.hessian_smallest, [end.hessian_smallest]),
+        newton_iterations=add(curve.newton_iterations, end.iterations),
+        residual_norm=add(curve.residual_norm, end.residual_norm))
 
 
 def _alpha_events(runs, observed, i, disc, vary_map, base, vary, v0, k) -> list[CurvePoint]:

@@ -31,7 +31,7 @@ them closes. The cusp is a regular solution of the square system (2m + 2 unknown
 (``event_residual`` with ``quadratic_coefficient``), refined by Newton from the recorded
 point next to the sign change of F_qq, differentiable in the remaining parameters
 (``differentiable_cusp``). The same Newton locates where a fold curve reaches a given lam
-(``event_solve`` with ``parameter_lam``). The cusp's normal form is
+(``event_solve`` with ``parameter_lam``), or a given u (``parameter_u``). The cusp's normal form is
 F = F_lam (lam - lam_c) + F_qu (u - u_c) q + F_qqq q^3 / 6 + ..., with the cubic
 coefficient (``cubic_coefficient``)
 
@@ -234,6 +234,11 @@ def quadratic_coefficient(w, model: EnergyModel, args_at: ArgsMap, args):
 def parameter_lam(w, model, args_at, args):
     """lam at w (the event of a fold curve reaching a given lam)."""
     return w[(w.shape[0] - 2) // 2 * 2]
+
+
+def parameter_u(w, model, args_at, args):
+    """u at w (the event of a fold curve reaching a given value of the second parameter)."""
+    return w[-1]
 
 
 def event_residual(w, data):
