@@ -1,0 +1,174 @@
+"""Fold curves in a second parameter and the cusp, against independent methods.
+
+The cusp is checked against the one-parameter fold pairs of ``locate_folds`` (Moore-Spence at
+fixed parameters, itself checked against shooting in test_magnet): approaching the cusp the
+two folds merge, and the squared separation of their reduced coordinates, (q_up - q_low)^2,
+is an analytic function of the parameter with a simple zero at the cusp (a symmetric
+function of the two roots of the normal form), as are the mean angle and mean q. A degree-6
+polynomial through nine fold pairs within 0.1-1 % of the cusp extrapolates them to it.
+"""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxrod.analysis import fold_curves as fc
+from jaxrod.analysis.magnet import _equilibrium, locate_folds
+from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.params import ParameterError
+from jaxrod.scenes.dipole import DipoleMagnet
+from jaxrod.solvers.continuation import REACHED_BOUND
+from jaxrod.solvers.fold_curve import fold_curve_run
+
+D_EXP = 11.25 / 9.2
+CASES = {200: (2.2, 0.0236), 100: (4.4, 0.0472)}
+
+
+@pytest.fixture(scope="module")
+def cusps():
+    out = {}
+    for e, (G, M) in CASES.items():
+        point = fc.DesignPoint.from_groups(G, M, D_EXP)
+        for vary in ("D", "M", "G"):
+            out[e, vary] = (point, fc.find_cusp(point, vary))
+    return out
+
+
+def _extrapolated_cusp(point, vary, cusp):
+    """(value, alpha_deg, q) of the cusp from fold pairs on the bistable side."""
+    v0 = point.values[point.index(vary)]
+    side = math.copysign(1.0, v0 - cusp.value)
+    rows = []
+    for h in np.geomspace(1e-3, 1e-2, 9) * cusp.value:
+        G, M, D = point.replace(vary, cusp.value + side * h).groups()
+        rep = locate_folds(DipoleMagnet(G, M, D, 0.0))
+        assert rep.converged and [f.kind for f in rep.folds] == ["lower", "upper"]
+        low, up = rep.folds
+        rows.append((side * h, (up.q - low.q) ** 2, 0.5 * (up.alpha_deg + low.alpha_deg),
+                     0.5 * (up.q + low.q)))
+    h, dq2, alpha, q = np.array(rows).T
+    roots = np.roots(np.polyfit(h, dq2, 6))
+    root = roots[np.argmin(np.abs(roots))].real
+    return (cusp.value + root, np.polyval(np.polyfit(h, alpha, 6), root),
+            np.polyval(np.polyfit(h, q, 6), root))
+
+
+@pytest.mark.parametrize("E", [200, 100])
+@pytest.mark.parametrize("vary", ["D", "M", "G"])
+def test_cusp_agrees_with_merging_fold_pairs(cusps, E, vary):
+    point, cusp = cusps[E, vary]
+    assert cusp.kind == "cusp" and cusp.converged
+    assert abs(cusp.d2F_dq2) < 1e-9 and abs(cusp.hessian_smallest[0]) < 1e-9
+    value, alpha, q = _extrapolated_cusp(point, vary, cusp)
+    assert abs(value - cusp.value) < 1e-10 * max(1.0, abs(cusp.value))
+    assert abs(alpha - cusp.alpha_deg) < 1e-9
+    assert abs(q - cusp.q) < 1e-10
+
+
+def test_cubic_coefficient_from_equilibria_at_the_cusp(cusps):
+    """alpha - alpha_c = -F_qqq / (6 F_alpha) (q - q_c)^3 + O(dq^4) on the equilibria at the
+    cusp's parameter; the mean of dq = +-h cancels the quartic term."""
+    point, cusp = cusps[200, "D"]
+    G, M, D = point.replace("D", cusp.value).groups()
+    scene = DipoleMagnet(G, M, D, 0.0)
+    disc = planar_discretisation(fc.DEFAULT_N, "clamped")
+    m = disc.size
+    theta_c, phi = cusp.state[:m], cusp.state[m:2 * m]
+    phi = phi / float(disc.mean(jnp.asarray(phi)))
+    alpha_c = math.radians(cusp.alpha_deg)
+    c3 = -cusp.cubic_coefficient / (6.0 * cusp.dF_dalpha)
+    estimates = []
+    for h in (0.02, 0.01):
+        ratios = []
+        for dq in (h, -h):
+            alpha = alpha_c + c3 * dq**3
+            res = _equilibrium(jnp.asarray(theta_c + dq * phi), alpha, scene, disc)
+            assert bool(res.converged)
+            ratios.append((alpha - alpha_c) / (float(disc.mean(res.x)) - cusp.q) ** 3)
+        estimates.append(np.mean(ratios))
+    # the symmetric mean is O(h^2) from c3: Richardson on h = 0.02, 0.01
+    richardson = (4.0 * estimates[1] - estimates[0]) / 3.0
+    assert abs(richardson / c3 - 1.0) < 1e-4
+
+
+def test_cusp_location_derivatives_match_finite_differences(cusps):
+    point, cusp = cusps[200, "D"]
+    location = fc.cusp_location(point, "D", cusp)
+    values = jnp.asarray(point.values)
+    (d_value, d_alpha, _), = [jax.jacfwd(location)(values)]
+    value, alpha, stats = location(values)
+    assert float(stats[0]) == 1.0 and abs(float(value) - cusp.value) < 1e-12
+    for i, name in ((0, "G"), (1, "M")):
+        h = 1e-5 * point.values[i]
+        plus = fc.find_cusp(point.replace(name, point.values[i] + h), "D")
+        minus = fc.find_cusp(point.replace(name, point.values[i] - h), "D")
+        fd_value = (plus.value - minus.value) / (2 * h)
+        fd_alpha = math.radians(plus.alpha_deg - minus.alpha_deg) / (2 * h)
+        assert abs(float(d_value[i]) - fd_value) < 1e-6 * abs(fd_value)
+        assert abs(float(d_alpha[i]) - fd_alpha) < 1e-6 * max(abs(fd_alpha), 1.0)
+    assert abs(float(d_value[2])) < 1e-12  # the varied input's own start has no effect
+
+
+def test_fold_curve_points_are_folds_of_locate_folds():
+    point = fc.DesignPoint.from_groups(*CASES[200], D_EXP)
+    curves = fc.fold_curves(point, "G", 5.0)
+    assert curves.converged and curves.cusp is None
+    for curve in curves.curves:
+        assert curve.value[-1] == pytest.approx(5.0, abs=1e-12)
+        for j in (len(curve.value) // 3, len(curve.value) - 1):
+            rep = locate_folds(DipoleMagnet(curve.value[j], CASES[200][1], D_EXP, 0.0))
+            fold = {f.kind: f for f in rep.folds}[curve.start]
+            assert abs(fold.alpha_deg - curve.alpha_deg[j]) < 1e-9
+            assert abs(fold.q - curve.q[j]) < 1e-10
+
+
+def test_fold_curve_follows_round_the_cusp_back_to_the_other_fold():
+    """From the lower fold with D increasing, the curve turns back in D at the cusp and
+    returns as the upper fold: at the starting D it is locate_folds' upper fold."""
+    point = fc.DesignPoint.from_groups(*CASES[200], D_EXP)
+    w0, folds = fc._start(point, fc.DEFAULT_N)
+    disc = planar_discretisation(fc.DEFAULT_N, "clamped")
+    opts = fc.CURVE_OPTIONS._replace(u_min=-0.01, u_max=0.5)
+    run = jax.jit(fold_curve_run, static_argnums=(0, 1, 5))(
+        fc.ALPHA_MODEL, fc.Vary("groups", 2), jnp.asarray(w0[0]),
+        (jnp.asarray(point.values), disc), opts, 512, 1.0)
+    k = int(run.num_points)
+    assert int(run.status) == REACHED_BOUND
+    u = np.asarray(run.w[:k, -1])
+    m = disc.size
+    assert u.max() > 0.06 and u[-1] < 0  # went past the cusp (D = 1.3064) and came back
+    assert np.sum(np.diff(np.sign(np.diff(u))) != 0) == 1  # one turning point in D
+    j = k - 2  # the last point with u >= 0: refine to u = 0 exactly
+    end = fc._refine("value", np.asarray(run.w[j]), 0.0, disc, fc.Vary("groups", 2),
+                     jnp.asarray(point.values), "D", D_EXP, "end")
+    assert end.converged and abs(end.alpha_deg - folds[1].alpha_deg) < 1e-9
+    assert abs(end.q - folds[1].q) < 1e-10
+    assert np.asarray(run.w[j, 2 * m]) > np.asarray(run.w[0, 2 * m])
+
+
+def test_physical_input_cusp_matches_group_cusp():
+    """Varying the track radius R with L fixed is varying D = R / L."""
+    from jaxrod.params import NDFEB_MAGNET, preset
+
+    rod, _ = preset("permanent-magnet")
+    point = fc.DesignPoint.from_physical(rod, NDFEB_MAGNET)
+    by_radius = fc.find_cusp(point, "track-radius")
+    G, M, D = point.groups()
+    by_D = fc.find_cusp(fc.DesignPoint.from_groups(G, M, D), "D")
+    assert abs(by_radius.value / rod.length - by_D.value) < 1e-11
+    assert abs(by_radius.alpha_deg - by_D.alpha_deg) < 1e-9
+
+
+def test_bad_inputs_are_refused():
+    point = fc.DesignPoint.from_groups(*CASES[200], D_EXP)
+    with pytest.raises(ParameterError, match="vary must be one of"):
+        point.index("E")
+    with pytest.raises(ParameterError, match="D must stay in"):
+        fc.fold_curves(point, "D", 0.99)
+    with pytest.raises(ParameterError, match="no fold to start from"):
+        fc.find_cusp(fc.DesignPoint.from_groups(2.2, 0.001, D_EXP), "D")
+    with pytest.raises(ParameterError, match="D"):
+        fc.DesignPoint.from_groups(2.2, 0.0236, 1.0)
