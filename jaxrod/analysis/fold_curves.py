@@ -168,8 +168,15 @@ def _observables(w, scene_at, base, disc: PlanarDiscretisation):
 def _curves_program(w0, directions, base, disc, opts, capacity, vary):
     run = lambda w, d: fold_curve_run(ALPHA_MODEL, vary, w, (base, disc), opts, capacity, d)
     runs = jax.vmap(run)(w0, directions)
-    observe = jax.vmap(jax.vmap(lambda w: _observables(w, vary, base, disc)))
-    return runs, observe(runs.w)
+    m = disc.size
+    # the fold's data from what the run recorded, with phi scaled to int phi = 1
+    phi_mean = jax.vmap(jax.vmap(disc.mean))(runs.w[..., m:2 * m])
+    x = runs.w[..., :m]
+    observed = (runs.w[..., -1], runs.w[..., 2 * m], jax.vmap(jax.vmap(disc.mean))(x),
+                jax.vmap(jax.vmap(lambda th: tip_angle(th, disc)))(x),
+                runs.lam_derivative / phi_mean, runs.cubic_form / phi_mean**3,
+                runs.smallest_eigenvalues)
+    return runs, observed
 
 
 _curves = StoredProgram("fold-curves", _curves_program, static_argnames=("capacity", "vary"))

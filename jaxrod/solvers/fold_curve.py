@@ -97,6 +97,9 @@ class RawFoldCurve(NamedTuple):
     w: jax.Array  # (capacity, 2m + 2): (x, phi, lam, u)
     tangent: jax.Array  # (capacity, 2m + 2)
     cusp_test: jax.Array  # (capacity,): D^3E[phi, phi, phi] / |phi|^3
+    lam_derivative: jax.Array  # (capacity,): F_lam . phi
+    cubic_form: jax.Array  # (capacity,): D^3E[phi, phi, phi]
+    smallest_eigenvalues: jax.Array  # (capacity, 2): of the Hessian H
     newton_iterations: jax.Array
     residual_norm: jax.Array
     num_points: jax.Array
@@ -147,6 +150,15 @@ def _cusp_test(J, phi):
     return phi @ J[m:2 * m, :m] @ phi / jnp.dot(phi, phi) ** 1.5  # = quadratic_coefficient
 
 
+def _point_data(J, phi):
+    """(cusp test, F_lam . phi, D^3E[phi, phi, phi], two smallest eigenvalues of H) from the
+    fold Jacobian's blocks [H 0 F_lam; D^3E[phi] H (H phi)_lam; ...] at a point."""
+    m = phi.shape[0]
+    cubic = phi @ J[m:2 * m, :m] @ phi
+    eigs = jnp.linalg.eigvalsh(J[:m, :m])[:2]
+    return cubic / jnp.dot(phi, phi) ** 1.5, J[:m, 2 * m] @ phi, cubic, eigs
+
+
 class _State(NamedTuple):
     w: jax.Array
     t: jax.Array
@@ -174,13 +186,23 @@ def fold_curve_run(model: EnergyModel, args_at: ArgsMap, w0, args, opts: FoldCur
     t0 = _tangent(J0, e_u, W)
     t0 = jnp.where(t0[-1] * direction < 0, -t0, t0)
     nan = jnp.full(capacity, jnp.nan, w0.dtype)
+
+    def record_data(o: RawFoldCurve, k, J, phi):
+        test, lam_d, cubic, eigs = _point_data(J, phi)
+        return o._replace(cusp_test=o.cusp_test.at[k].set(test),
+                          lam_derivative=o.lam_derivative.at[k].set(lam_d),
+                          cubic_form=o.cubic_form.at[k].set(cubic),
+                          smallest_eigenvalues=o.smallest_eigenvalues.at[k].set(eigs))
+
     out = RawFoldCurve(
         w=jnp.full((capacity, w0.shape[0]), jnp.nan, w0.dtype).at[0].set(w0),
         tangent=jnp.full((capacity, w0.shape[0]), jnp.nan, w0.dtype).at[0].set(t0),
-        cusp_test=nan.at[0].set(_cusp_test(J0, w0[m:2 * m])),
+        cusp_test=nan, lam_derivative=nan, cubic_form=nan,
+        smallest_eigenvalues=jnp.full((capacity, 2), jnp.nan, w0.dtype),
         newton_iterations=jnp.full(capacity, -1).at[0].set(0),
         residual_norm=nan.at[0].set(jnp.max(jnp.abs(R0))), num_points=jnp.asarray(0),
         status=jnp.asarray(RUNNING), rejected_steps=jnp.asarray(0))
+    out = record_data(out, 0, J0, w0[m:2 * m])
 
     def step(s: _State) -> _State:
         w_pred = s.w + s.ds * s.t
@@ -195,10 +217,10 @@ def fold_curve_run(model: EnergyModel, args_at: ArgsMap, w0, args, opts: FoldCur
         cusps = s.cusps + jnp.where(accept & (test * s.out.cusp_test[s.k] < 0), 1, 0)
 
         def record(o: RawFoldCurve):
-            return o._replace(w=o.w.at[k].set(res.x), tangent=o.tangent.at[k].set(t_new),
-                              cusp_test=o.cusp_test.at[k].set(test),
-                              newton_iterations=o.newton_iterations.at[k].set(res.iterations),
-                              residual_norm=o.residual_norm.at[k].set(res.residual_norm))
+            o = o._replace(w=o.w.at[k].set(res.x), tangent=o.tangent.at[k].set(t_new),
+                           newton_iterations=o.newton_iterations.at[k].set(res.iterations),
+                           residual_norm=o.residual_norm.at[k].set(res.residual_norm))
+            return record_data(o, k, J, res.x[m:2 * m])
 
         out = jax.lax.cond(accept, record, lambda o: o, s.out)
         ds = jnp.where(accept, jnp.where(res.iterations <= 3,
