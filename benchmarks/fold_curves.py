@@ -215,7 +215,7 @@ t0 = time.perf_counter()
 r1 = auto.run(e="magnet", c="magnet")
 lower = min((p for p in r1("LP") if p["PAR(1)"] > 0), key=lambda p: p["PAR(1)"])
 r2 = auto.run(lower, ICP=[4, 1], ISW=2)
-r3 = auto.run(r2, UZSTOP={{4: 1.5}}, NMX=800, DSMAX={dsmax}, DS=0.01)
+r3 = auto.run(r2, UZSTOP={{4: 1.5}}, STOP=["LP1"], NMX=4000, DSMAX={dsmax}, DS=0.01)
 wall = time.perf_counter() - t0
 curve = [[float(p["PAR(4)"]), float(p["PAR(1)"])] for p in r3[0]]
 lps = [[float(p["PAR(4)"]), float(p["PAR(1)"])] for p in r3("LP")]

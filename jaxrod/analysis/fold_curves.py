@@ -286,7 +286,7 @@ class FoldCurves:
 
 #: Fold-curve step control: u is the relative change of the varied input; alpha is bounded
 #: to [-90, 180] degrees (a fold leaving (0, 90] is reported, and followed a little further).
-CURVE_OPTIONS = FoldCurveOptions(ds=0.01, ds_min=1e-9, ds_max=0.01, lam_min=-math.pi / 2,
+CURVE_OPTIONS = FoldCurveOptions(ds=0.01, ds_min=1e-9, ds_max=0.02, lam_min=-math.pi / 2,
                                  lam_max=math.pi, tol=1e-12)
 CURVE_CAPACITY = 512
 

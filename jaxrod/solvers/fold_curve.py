@@ -63,7 +63,7 @@ from jaxrod.solvers.continuation import (
     STATUS_MESSAGES,
     STEP_TOO_SMALL,
 )
-from jaxrod.solvers.folds import moore_spence_linearisation, moore_spence_residual
+from jaxrod.solvers.folds import moore_spence_residual
 from jaxrod.solvers.newton import implicit_newton, newton
 
 CUSP_PASSED = 5
@@ -118,12 +118,29 @@ def _weights(m, dtype):
 
 def fold_linearisation(w, ell, model: EnergyModel, args_at: ArgsMap, args):
     """(R(w), [R_z R_u]) at w = (x, phi, lam, u): the Moore-Spence residual and its Jacobian
-    in all 2m + 2 unknowns."""
-    z, u = w[:-1], w[-1]
-    residual = lambda v: moore_spence_residual(z, (model, ell, args_at(v, args)))
-    R, R_u = jax.jvp(residual, (u,), (jnp.ones_like(u),))
-    _, R_z = moore_spence_linearisation(z, (model, ell, args_at(u, args)))
-    return R, jnp.hstack([R_z, R_u[:, None]])
+    in all 2m + 2 unknowns,
+
+        [ H          0    F_lam         F_u        ]
+        [ D^3E[phi]  H    (H phi)_lam   (H phi)_u  ]
+        [ 0          l^T  0             0          ],
+
+    from one assembly of the Hessian and gradient and three tangents of them, along
+    (phi, 0, 0), (0, 1, 0) and (0, 0, 1) in (x, lam, u)."""
+    m = ell.shape[0]
+    x, phi, lam, u = split(w, m)
+    pair = lambda y, l, v: (model.hessian(y, l, args_at(v, args)),
+                            model.gradient(y, l, args_at(v, args)))
+    zero = jnp.zeros_like(phi)
+    tx = jnp.stack([phi, zero, zero])
+    tl = jnp.array([0.0, 1.0, 0.0], w.dtype)
+    tu = jnp.array([0.0, 0.0, 1.0], w.dtype)
+    (H, F), (dH, dF) = jax.vmap(lambda a, b, c: jax.jvp(pair, (x, lam, u), (a, b, c)),
+                                out_axes=(None, 0))(tx, tl, tu)
+    R = jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
+    top = jnp.hstack([H, jnp.zeros_like(H), dF[1][:, None], dF[2][:, None]])
+    mid = jnp.hstack([dH[0], H, (dH[1] @ phi)[:, None], (dH[2] @ phi)[:, None]])
+    bottom = jnp.concatenate([jnp.zeros(m, w.dtype), ell, jnp.zeros(2, w.dtype)])[None, :]
+    return R, jnp.vstack([top, mid, bottom])
 
 
 def _corrector(w, data):
