@@ -215,7 +215,7 @@ t0 = time.perf_counter()
 r1 = auto.run(e="magnet", c="magnet")
 lower = min((p for p in r1("LP") if p["PAR(1)"] > 0), key=lambda p: p["PAR(1)"])
 r2 = auto.run(lower, ICP=[4, 1], ISW=2)
-r3 = auto.run(r2, UZSTOP={{4: 1.5}}, STOP=["LP1"], NMX=4000, DSMAX={dsmax}, DS=0.01)
+r3 = auto.run(r2, UZSTOP={{4: 1.5}}, STOP=["LP2"], NMX=4000, DSMAX={dsmax}, DS=0.01)
 wall = time.perf_counter() - t0
 curve = [[float(p["PAR(4)"]), float(p["PAR(1)"])] for p in r3[0]]
 lps = [[float(p["PAR(4)"]), float(p["PAR(1)"])] for p in r3("LP")]
@@ -254,9 +254,11 @@ def run_auto(ntst: int, ncol: int, dsmax: float, repeat: int = 2) -> dict:
             runs.append(json.loads(line[0].split(" ", 1)[1]))
     last = runs[-1]
     second = [lp for lp in last["lp"] if lp[0] < 1.1 and lp[1] > 1.0]
+    first = [lp for lp in last["lp"] if lp[0] > 1.2]
     return {"ntst": ntst, "ncol": ncol, "dsmax": dsmax,
             "run_s": min(r["wall_s"] for r in runs[1:]),
-            "cusp_D": _auto_max_D(last["curve"]),
+            "cusp_D": first[0][0] if first else _auto_max_D(last["curve"]),
+            "cusp_located": "LP" if first else "curve maximum",
             "second_cusp_D": second[0][0] if second else None,
             "second_cusp_alpha_deg": math.degrees(second[0][1]) if second else None,
             "points": len(last["curve"])}
@@ -390,7 +392,7 @@ def markdown(res: dict) -> str:
             continue
         lines.append(f"| AUTO-07p ISW=2 | NTST={r['ntst']}, NCOL={r['ncol']}, DSMAX="
                      f"{r['dsmax']} ({r['points']} points) | {_e(r['cusp_D_error'])} "
-                     f"(curve maximum) | {_e(r['second_cusp_D_error'])} (LP) | "
+                     f"({r['cusp_located']}) | {_e(r['second_cusp_D_error'])} (LP) | "
                      f"{1e3 * r['run_s']:.0f} ms | {r['ratio_to_jaxrod_warm']:.1f} |")
     jc = res.get("jaxcont")
     if jc is not None:

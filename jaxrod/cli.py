@@ -252,6 +252,86 @@ def cmd_foldcurve(args) -> int:
     return 0 if curves.converged else 1
 
 
+def cmd_map(args) -> int:
+    if args.num_processes > 1:
+        import jax
+
+        if args.coordinator is None or args.process_id is None:
+            raise ParameterError("num-processes: a run over several processes needs "
+                                 "--coordinator HOST:PORT and --process-id")
+        jax.distributed.initialize(coordinator_address=args.coordinator,
+                                   num_processes=args.num_processes,
+                                   process_id=args.process_id)
+    import numpy as np
+
+    from jaxrod.analysis.design_map import Axis, MapSpec, read_store, run_map
+
+    point = _design_point_from_args(args)
+    x, y = Axis.parse(args.x), Axis.parse(args.y)
+    point.index(x.name)
+    point.index(y.name)
+    if not 4 <= args.chunk <= 1000:
+        raise ParameterError(f"chunk must be in [4, 1000], got {args.chunk}")
+    out = _output_dir(args.out)
+    spec = MapSpec(point, x, y, chunk=args.chunk)
+    try:
+        counts = run_map(spec, out, progress=not args.quiet)
+    except KeyboardInterrupt:
+        print(f"jaxrod map: interrupted; the finished chunks are kept in {out} (run the same "
+              "command again to resume)", file=sys.stderr)
+        return 130
+    import jax
+
+    summary = {"out": str(out), "x": x.name, "y": y.name, "points": x.count * y.count,
+               "process": jax.process_index(), "processes": jax.process_count()} | counts
+    if jax.process_index() == 0 and jax.process_count() == 1:
+        data = read_store(out)
+        reasons = np.bincount(data["reason"].ravel().astype(int), minlength=5)
+        summary["reason_counts"] = {name: int(c) for name, c in zip(
+            ("bistable", "not_bistable", "fold_beyond_90", "invalid_input", "not_converged"),
+            reasons, strict=True)}
+        if not args.no_plot:
+            from jaxrod.plotting import design_map_figure
+
+            cusps = _row_cusps(spec, data)
+            summary["cusps"] = cusps
+            design_map_figure(data, spec, cusps).savefig(out / "map.png", dpi=120)
+        (out / "map.json").write_text(json.dumps(summary, indent=1))
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"{summary['points']} points in {counts['chunks']} chunks ({counts['computed']} "
+              f"computed, {counts['resumed']} already done) -> {out}")
+        if "reason_counts" in summary:
+            print(", ".join(f"{k}: {v}" for k, v in summary["reason_counts"].items()))
+    return 0
+
+
+def _row_cusps(spec, data, rows: int = 12) -> list[dict]:
+    """The cusp in x on up to ``rows`` grid rows, each from the row's widest bistable
+    point (``find_cusp``): the cusp curve in the map's plane."""
+    import numpy as np
+
+    from jaxrod.analysis.fold_curves import find_cusp
+
+    out = []
+    for iy in np.unique(np.linspace(0, spec.y.count - 1, rows).astype(int)):
+        width = np.where(data["reason"][iy] == 0, data["width_deg"][iy], -np.inf)
+        if not np.isfinite(width.max()):
+            continue
+        ix = int(np.argmax(width))
+        start = spec.point.replace(spec.x.name, data["x"][ix]).replace(spec.y.name,
+                                                                       data["y"][iy])
+        try:
+            cusp = find_cusp(start, spec.x.name)
+        except ParameterError:
+            continue
+        if cusp.converged:
+            out.append({spec.y.name: float(data["y"][iy]), spec.x.name: cusp.value,
+                        "alpha_deg": cusp.alpha_deg})
+    return out
+
+
 def _output_dir(path: str) -> Path:
     """Create the output directory before any work starts (ParameterError if it cannot be)."""
     out = Path(path)
@@ -705,6 +785,21 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the value of the varied input where the curves end")
     fc.add_argument("--out", default=None, help="directory for foldcurve.csv/.json/.png")
     fc.set_defaults(func=cmd_foldcurve)
+
+    mp = sub.add_parser("map", help="capture/release angles and hysteresis width on a grid "
+                        "of two inputs (chunked Zarr store, resumable)")
+    magnet_inputs(mp)
+    mp.add_argument("--x", required=True, help="name:start:stop:count of the first input")
+    mp.add_argument("--y", required=True, help="name:start:stop:count of the second input")
+    mp.add_argument("--out", required=True, help="directory of the Zarr store and map.png")
+    mp.add_argument("--chunk", type=int, default=50, help="chunk edge in grid points")
+    mp.add_argument("--quiet", action="store_true", help="no progress bar")
+    mp.add_argument("--no-plot", action="store_true", help="skip map.png and the cusp curve")
+    mp.add_argument("--coordinator", default=None, help="HOST:PORT of process 0 "
+                    "(jax.distributed), for a map over several processes or hosts")
+    mp.add_argument("--num-processes", type=int, default=1)
+    mp.add_argument("--process-id", type=int, default=None)
+    mp.set_defaults(func=cmd_map)
 
     r = sub.add_parser("reproduce", help="recompute the paper's tables and verdicts")
     r.add_argument("--out", default=None, help="directory for report.md, report.json, PNGs")

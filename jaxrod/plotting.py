@@ -154,3 +154,36 @@ def fold_curve_figure(curves):
     ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
+
+
+def design_map_figure(data: dict, spec, cusps=()):
+    """Hysteresis width over the map's two inputs (filled contours), capture and release
+    angles as contour lines, the cusp curve (where the bistability ends) and the points
+    where a fold lies beyond 90 degrees."""
+    from jaxrod.params import UNITS
+
+    fig, ax = plt.subplots(figsize=(8, 5.6))
+    X, Y = np.meshgrid(data["x"], data["y"])
+    width = np.where(data["reason"] == 0, data["width_deg"], np.nan)
+    if np.isfinite(width).any():
+        filled = ax.contourf(X, Y, width, levels=12, cmap="viridis")
+        fig.colorbar(filled, ax=ax, label="hysteresis width (deg)")
+        for name, colour in (("capture_deg", "w"), ("release_deg", "0.2")):
+            field = np.where(data["reason"] == 0, data[name], np.nan)
+            lines = ax.contour(X, Y, field, levels=6, colors=colour, linewidths=0.7)
+            ax.clabel(lines, fontsize=6, fmt="%.0f")
+    beyond = data["reason"] == 2
+    if beyond.any():
+        ax.plot(X[beyond], Y[beyond], "r.", ms=2, label="a fold beyond 90 deg")
+    if cusps:
+        ax.plot([c[spec.x.name] for c in cusps], [c[spec.y.name] for c in cusps], "k*-",
+                ms=8, label="cusp (bistability ends)")
+    unit = lambda n: f" ({UNITS[n]})" if UNITS[n] else ""
+    ax.set_xlabel(spec.x.name + unit(spec.x.name))
+    ax.set_ylabel(spec.y.name + unit(spec.y.name))
+    ax.set_title("bistable region: width filled; capture (white) and release (dark) angles",
+                 fontsize=10)
+    if beyond.any() or cusps:
+        ax.legend(fontsize=8, loc="upper right")
+    fig.tight_layout()
+    return fig

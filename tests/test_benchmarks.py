@@ -98,3 +98,11 @@ def test_dense_solve_quick(tmp_path):
     result = run_quick("dense_solve.py", tmp_path)
     for r in result["rows"]:
         assert r["max_difference"] < (1e-12 if r["dtype"] == "float64" else 1e-4), r
+
+
+def test_fold_curves_quick(tmp_path):
+    result = run_quick("fold_curves.py", tmp_path)
+    assert result["jaxrod"]["cusp_D_error"] < 1e-11
+    rows = result["convergence"]["rows"]
+    assert rows[-1]["cusp_D_error"] < 1e-11 and rows[-1]["second_cusp_D_error"] < 1e-8
+    assert all(r["moore_spence_cond"] < 1e6 for r in result["conditioning"])

@@ -144,3 +144,49 @@ def test_track_json_and_files(tmp_path, capsys):
     lines = (tmp_path / "track.csv").read_text().splitlines()
     assert lines[0].startswith("t_deg,") and len(lines) == out["points"] + 1
     assert main(["track", *MAGNET, "--alpha0", "95"]) == 2
+
+
+PAPER_POINT = ["--G", "2.2", "--M", "0.0236", "--D", "1.2228260869565217"]
+
+
+def test_cusp_json(capsys):
+    assert main(["cusp", *PAPER_POINT, "--vary", "D", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["vary"] == "D" and out["converged"] is True
+    assert {"D", "alpha_deg", "q", "tip_deg", "cubic_coefficient"} <= set(out["cusp"])
+    # the fold system's value, against the one-parameter fold pair just before the cusp
+    from jaxrod.analysis.magnet import locate_folds, make_scene
+
+    rep = locate_folds(make_scene(2.2, 0.0236, out["cusp"]["D"] - 3e-3))
+    low, up = rep.folds
+    assert rep.converged and up.alpha_deg - low.alpha_deg < 0.1  # ~ (D_c - D)^(3/2)
+    assert low.alpha_deg < out["cusp"]["alpha_deg"] < up.alpha_deg
+
+
+def test_foldcurve_writes_files(tmp_path, capsys):
+    out = tmp_path / "fc"
+    assert main(["foldcurve", *PAPER_POINT, "--vary", "D", "--to", "1.5", "--out", str(out),
+                 "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["cusp"] is not None and summary["converged"]
+    for name in ("foldcurve.csv", "foldcurve.json", "foldcurve.png"):
+        assert (out / name).exists()
+    header = (out / "foldcurve.csv").read_text().splitlines()[0]
+    assert header.startswith("curve,D,alpha_deg,q,tip_deg,dF_dalpha,d2F_dq2")
+
+
+@pytest.mark.parametrize("argv, name", [
+    (["cusp", *PAPER_POINT, "--vary", "K"], "--vary"),
+    (["cusp", *PAPER_POINT, "--vary", "E"], "vary"),
+    (["foldcurve", *PAPER_POINT, "--vary", "D", "--to", "0.95"], "D must stay in"),
+    (["foldcurve", "--preset", "permanent-magnet", "--vary", "track-radius", "--to", "0.095"],
+     "track-radius must stay in"),
+    (["cusp", "--G", "2.2", "--M", "0.001", "--D", "1.2228", "--vary", "D"],
+     "no fold to start from"),
+    (["foldcurve", *PAPER_POINT, "--vary", "D", "--to", "1.4", "--out", "/proc/nope"], "out"),
+])
+def test_fold_curve_bad_input_exit_2(argv, name):
+    proc = run(*argv)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and name in lines[0], proc.stderr

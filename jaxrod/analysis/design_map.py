@@ -1,0 +1,414 @@
+"""Bistability maps over two inputs: capture and release angles and the hysteresis width on
+a grid, chunked on disk, resumable, sharded over devices and processes.
+
+A map varies two inputs of a ``DesignPoint`` (groups or physical inputs, the others fixed)
+over a grid ``name:start:stop:count`` each. Every grid point goes through three tiers, so no
+point is dropped silently:
+
+1. the batched fold-pair path (``jaxrod.analysis.batch.fold_pair_states``: one-mode brackets
+   and Moore-Spence, fixed cost per point), vmapped over a chunk;
+2. points it does not converge are retried by a batched continuation from the straight rod
+   (the ``locate_folds`` algorithm, vmapped: pseudo-arclength in alpha up to 180 degrees,
+   the first two folds refined by Moore-Spence), which also tells why there is no pair;
+3. points still failing there are retried by ``locate_folds`` itself, one by one.
+
+Each point ends with a reason code (``REASONS``): OK, NOT_BISTABLE (the branch through the
+straight rod has fewer than two folds with alpha in (0, 180] degrees), FOLD_BEYOND_90 (a fold
+leaves alpha in (0, 90]: the experiment's magnet cannot reach it), INVALID_INPUT (the magnet
+would touch the rod, or an input is not positive) or NOT_CONVERGED; angles are NaN unless OK.
+
+The grid is written chunk by chunk as a Zarr (version 2) store, written with numpy alone
+(raw little-endian chunks, no compressor), which xarray opens with ``xarray.open_zarr``
+(``pip install 'jaxrod[maps]'``): variables ``capture_deg`` (the lower fold: the magnet
+angle where the disengaged rod is captured), ``release_deg`` (the upper fold),
+``width_deg`` and ``reason`` on dimensions (y, x), with units and provenance attributes. A
+chunk is complete when its ``reason`` file exists (written last, atomically): a killed run
+started again with the same arguments skips the complete chunks and loses nothing.
+
+Scale-out uses JAX's own machinery: a chunk's points are laid out over all local devices
+with a ``jax.sharding.NamedSharding`` (one mesh axis, the points), so XLA runs each device's
+share; with ``jax.distributed`` initialised, process p of P computes and writes the chunks
+whose index is p modulo P (the store's metadata is written by every process, identically).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.analysis.batch import fold_pair_states
+from jaxrod.analysis.fold_curves import DesignPoint, groups_of
+from jaxrod.analysis.magnet import default_options, locate_folds
+from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.params import UNITS, ParameterError
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
+from jaxrod.solvers.continuation import continuation_run
+from jaxrod.solvers.folds import moore_spence_solve
+from jaxrod.solvers.newton import newton
+
+OK, NOT_BISTABLE, FOLD_BEYOND_90, INVALID_INPUT, NOT_CONVERGED = 0, 1, 2, 3, 4
+REASONS = {OK: "bistable: both folds in (0, 90] degrees",
+           NOT_BISTABLE: "not bistable: fewer than two folds on the branch through the "
+           "straight rod",
+           FOLD_BEYOND_90: "a fold lies beyond 90 degrees (outside the magnet's sweep)",
+           INVALID_INPUT: "invalid input: the magnet would touch the rod, or an input is not "
+           "positive",
+           NOT_CONVERGED: "no solver converged (batched path, batched continuation and "
+           "locate_folds)"}
+VARIABLES = ("capture_deg", "release_deg", "width_deg", "reason")
+#: Chebyshev degree of the map's solves (the batched path's default: the fold angles reach
+#: their round-off floor from N = 12 at the paper's parameters).
+MAP_N = 12
+
+
+@dataclasses.dataclass(frozen=True)
+class Axis:
+    """One grid axis: ``count`` values of the input ``name`` from ``start`` to ``stop``."""
+
+    name: str
+    start: float
+    stop: float
+    count: int
+
+    @classmethod
+    def parse(cls, text: str) -> Axis:
+        """``name:start:stop:count`` (as on the command line)."""
+        parts = text.rsplit(":", 3)
+        if len(parts) != 4:
+            raise ParameterError(f"axis must be name:start:stop:count, got {text!r}")
+        name, start, stop, count = parts
+        try:
+            start_v, stop_v, count_v = float(start), float(stop), int(count)
+        except ValueError:
+            raise ParameterError(f"axis {text!r}: start and stop must be numbers and count "
+                                 "an integer") from None
+        if not (math.isfinite(start_v) and math.isfinite(stop_v)) or start_v == stop_v:
+            raise ParameterError(f"axis {name}: start and stop must be finite and differ, "
+                                 f"got {start!r}, {stop!r}")
+        if not 1 <= count_v <= 100_000:
+            raise ParameterError(f"axis {name}: count must be in [1, 100000], got {count_v}")
+        return cls(name, start_v, stop_v, count_v)
+
+    def values(self) -> np.ndarray:
+        return np.linspace(self.start, self.stop, self.count)
+
+
+def _grid_values(point: DesignPoint, x: Axis, y: Axis) -> np.ndarray:
+    """(y.count, x.count, len(point.values)): every grid point's inputs."""
+    ix, iy = point.index(x.name), point.index(y.name)
+    if ix == iy:
+        raise ParameterError(f"x and y must be different inputs, both are {x.name!r}")
+    base = np.broadcast_to(np.asarray(point.values, np.float64),
+                           (y.count, x.count, len(point.values))).copy()
+    base[:, :, ix] = x.values()[None, :]
+    base[:, :, iy] = y.values()[:, None]
+    return base
+
+
+def _validity(point: DesignPoint, values: np.ndarray) -> np.ndarray:
+    """True where every input is positive (M, magnetisations non-negative) and the magnet
+    clears the rod (D > 1 + a / L)."""
+    names = point.names
+    ok = np.ones(values.shape[:-1], bool)
+    for i, name in enumerate(names):
+        v = values[..., i]
+        ok &= np.isfinite(v) & ((v >= 0) if name in ("M", "rod-magnetisation", "remanence")
+                                else (v > 0))
+    G, M, D = groups_of(point.kind, np.moveaxis(values, -1, 0))
+    radius = (point.magnet_radius if point.kind == "groups"
+              else 0.5 * values[..., 7] / values[..., 4])
+    return ok & (D > 1.0 + radius)
+
+
+# --- tier 1 and 2: batched solves over a chunk ----------------------------------------------
+
+#: Capacity of the retry continuation (alpha up to 180 degrees, two folds).
+RETRY_CAPACITY = 160
+
+
+def _retry_one(G, M, D, disc):
+    """(alphas (2,), code) from a continuation in alpha from the straight rod (0 to 180
+    degrees, stopping after two folds) and Moore-Spence at its first two folds."""
+    scene = DipoleMagnet(G, M, D, 0.0)
+    args = (scene, disc)
+    start = newton(lambda th, a: ALPHA_MODEL.gradient(th, 0.0, a), jnp.zeros(disc.size), args,
+                   jacobian=lambda th, a: ALPHA_MODEL.hessian(th, 0.0, a))
+    opts = default_options(0)._replace(max_folds=2.0, lam_min=-0.1, lam_max=math.pi)
+    raw = continuation_run(ALPHA_MODEL, start.x, 0.0, args, opts, RETRY_CAPACITY, 1.0)
+    t = raw.tangent_lam
+    change = t[:-1] * t[1:] < 0.0
+    folds = jnp.sum(change)
+    i = jnp.nonzero(change, size=2, fill_value=0)[0]
+    j = jnp.where(jnp.abs(t[i]) <= jnp.abs(t[i + 1]), i, i + 1)
+
+    def refine(theta, alpha):
+        _, V = jnp.linalg.eigh(ALPHA_MODEL.hessian(theta, alpha, args))
+        fp = moore_spence_solve(ALPHA_MODEL, theta, alpha, V[:, 0], args)
+        return fp.lam, fp.newton.converged
+
+    alphas, ok = jax.vmap(refine)(raw.x[j], raw.lam[j])
+    alphas = jnp.sort(alphas)
+    two = start.converged & (folds >= 2)
+    solved = two & jnp.all(ok) & (alphas[1] - alphas[0] > 1e-9)
+    beyond = solved & (alphas[1] > 0.5 * math.pi)
+    # fewer than two folds: not bistable if the run ended normally (bound reached)
+    ended = raw.status == 1
+    code = jnp.where(solved, jnp.where(beyond, FOLD_BEYOND_90, OK),
+                     jnp.where(start.converged & ~two & ended, NOT_BISTABLE, NOT_CONVERGED))
+    return alphas, code
+
+
+def _chunk_program(G, M, D, n):
+    disc = planar_discretisation(n, "clamped")
+    z, converged, _ = jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc))(G, M, D)
+    return z[:, :, -1], converged
+
+
+def _retry_program(G, M, D, n):
+    disc = planar_discretisation(n, "clamped")
+    return jax.vmap(lambda g, m, d: _retry_one(g, m, d, disc))(G, M, D)
+
+
+_chunk = jax.jit(_chunk_program, static_argnames=("n",))
+_retry = jax.jit(_retry_program, static_argnames=("n",))
+
+
+def _sharded(arrays, devices):
+    """Pad the 1-D arrays to a multiple of the device count and lay them out over a one-axis
+    mesh of ``devices`` (the points split between devices)."""
+    k = arrays[0].shape[0]
+    nd = len(devices)
+    pad = (-k) % nd
+    mesh = jax.sharding.Mesh(np.asarray(devices), ("points",))
+    sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("points"))
+    # padding repeats the first point (a valid parameter set), dropped afterwards
+    return [jax.device_put(np.concatenate([a, np.repeat(a[:1], pad)]), sharding)
+            for a in arrays], k
+
+
+def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
+                 devices=None) -> dict[str, np.ndarray]:
+    """Capture/release angles (deg), width and reason for rows of input ``values`` (K, P)."""
+    devices = list(devices or jax.local_devices())
+    k = values.shape[0]
+    valid = _validity(point, values)
+    G, M, D = (np.asarray(v, np.float64) for v in groups_of(point.kind, values.T))
+    # invalid rows get a harmless stand-in (the first valid row, or the design point)
+    stand_in = values[np.argmax(valid)] if valid.any() else np.asarray(point.values)
+    g0, m0, d0 = (float(v) for v in groups_of(point.kind, stand_in))
+    G, M, D = (np.where(valid, v, s) for v, s in ((G, g0), (M, m0), (D, d0)))
+    alphas = np.full((k, 2), np.nan)
+    reason = np.where(valid, NOT_CONVERGED, INVALID_INPUT).astype(np.int8)
+    if valid.any():
+        inputs, _ = _sharded([G, M, D], devices)
+        a, ok = jax.device_get(_chunk(*inputs, n=n))
+        a, ok = np.asarray(a)[:k], np.asarray(ok)[:k] & valid
+        alphas[ok] = a[ok]
+        reason[ok] = OK
+        retry = np.nonzero(valid & ~ok)[0]
+        if retry.size:
+            inputs, _ = _sharded([G[retry], M[retry], D[retry]], devices)
+            a2, code = jax.device_get(_retry(*inputs, n=n))
+            a2, code = np.asarray(a2)[:retry.size], np.asarray(code)[:retry.size]
+            good = code == OK
+            alphas[retry[good]] = a2[good]
+            reason[retry] = code
+            for i in retry[code == NOT_CONVERGED]:  # tier 3: one by one
+                rep = locate_folds(DipoleMagnet(G[i], M[i], D[i], 0.0), n=max(n, 16))
+                kinds = {f.kind: f for f in rep.folds}
+                if rep.converged and "lower" in kinds and "upper" in kinds:
+                    alphas[i] = [math.radians(kinds["lower"].alpha_deg),
+                                 math.radians(kinds["upper"].alpha_deg)]
+                    reason[i] = OK
+                elif rep.branch.complete and len(rep.folds) < 2:
+                    reason[i] = NOT_BISTABLE
+    deg = np.degrees(alphas)
+    return {"capture_deg": deg[:, 0], "release_deg": deg[:, 1],
+            "width_deg": deg[:, 1] - deg[:, 0], "reason": reason}
+
+
+# --- the on-disk store (Zarr version 2, written with numpy) ----------------------------------
+
+_DTYPES = {"capture_deg": "<f8", "release_deg": "<f8", "width_deg": "<f8", "reason": "|i1"}
+_FILL = {"<f8": "NaN", "|i1": NOT_CONVERGED}
+LONG_NAMES = {"capture_deg": "magnet angle of the lower fold (capture of the disengaged rod)",
+              "release_deg": "magnet angle of the upper fold (release of the engaged rod)",
+              "width_deg": "hysteresis width, release - capture",
+              "reason": "0 bistable; 1 not bistable; 2 a fold beyond 90 deg; 3 invalid "
+              "input; 4 not converged"}
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    with tempfile.NamedTemporaryFile(dir=path.parent, delete=False, prefix=".tmp-") as f:
+        f.write(data)
+    os.replace(f.name, path)
+
+
+def _json(path: Path, obj) -> None:
+    _write_atomic(path, json.dumps(obj, indent=1, sort_keys=True).encode())
+
+
+def _array_meta(shape, chunks, dtype, fill):
+    return {"zarr_format": 2, "shape": list(shape), "chunks": list(chunks), "dtype": dtype,
+            "compressor": None, "fill_value": fill, "filters": None, "order": "C"}
+
+
+@dataclasses.dataclass(frozen=True)
+class MapSpec:
+    """What a map computes: the design point, both axes, the chunk size and N."""
+
+    point: DesignPoint
+    x: Axis
+    y: Axis
+    chunk: int = 50
+    n: int = MAP_N
+
+    def chunks(self) -> list[tuple[int, int]]:
+        """(iy, ix) chunk indices, row-major."""
+        ny, nx = -(-self.y.count // self.chunk), -(-self.x.count // self.chunk)
+        return [(i, j) for i in range(ny) for j in range(nx)]
+
+    def description(self) -> dict:
+        return {"point": self.point.as_dict(), "kind": self.point.kind,
+                "x": dataclasses.asdict(self.x), "y": dataclasses.asdict(self.y),
+                "chunk": self.chunk, "n": self.n}
+
+
+def _init_store(out: Path, spec: MapSpec) -> None:
+    """Write the store's metadata (identical from every process); refuse a store made for
+    other arguments (resuming needs the same map)."""
+    out.mkdir(parents=True, exist_ok=True)
+    description = json.dumps(spec.description(), sort_keys=True)
+    root = out / ".zattrs"
+    if root.exists():
+        try:
+            made = json.loads(root.read_text()).get("jaxrod_map")
+        except ValueError:
+            made = None
+        if made != description:
+            raise ParameterError(f"out: {out} holds a map made with other arguments; give a "
+                                 "new directory (or the same arguments to resume it)")
+    else:
+        import importlib.metadata
+
+        try:
+            version = importlib.metadata.version("jaxrod")
+        except importlib.metadata.PackageNotFoundError:
+            version = "unknown"
+        fixed = {k: v for k, v in spec.point.as_dict().items()
+                 if k not in (spec.x.name, spec.y.name)}
+        created = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+        _json(out / ".zgroup", {"zarr_format": 2})
+        _json(root, {
+            "title": f"jaxrod bistability map over {spec.x.name} and {spec.y.name}",
+            "source": f"jaxrod {version} (jax {jax.__version__}), N = {spec.n} Chebyshev",
+            "fixed_inputs": json.dumps(fixed), "reason_codes": json.dumps(REASONS),
+            "history": "created " + created, "jaxrod_map": description})
+    shape = (spec.y.count, spec.x.count)
+    for name in VARIABLES:
+        (out / name).mkdir(exist_ok=True)
+        dtype = _DTYPES[name]
+        _json(out / name / ".zarray", _array_meta(shape, (spec.chunk, spec.chunk), dtype,
+                                                  _FILL[dtype]))
+        _json(out / name / ".zattrs", {"_ARRAY_DIMENSIONS": ["y", "x"],
+                                       "units": "1" if name == "reason" else "degree",
+                                       "long_name": LONG_NAMES[name]})
+    for dim, axis in (("x", spec.x), ("y", spec.y)):
+        (out / dim).mkdir(exist_ok=True)
+        _json(out / dim / ".zarray", _array_meta((axis.count,), (axis.count,), "<f8", "NaN"))
+        _json(out / dim / ".zattrs", {"_ARRAY_DIMENSIONS": [dim],
+                                      "units": UNITS[axis.name] or "1",
+                                      "long_name": axis.name})
+        _write_atomic(out / dim / "0", axis.values().astype("<f8").tobytes())
+
+
+def _chunk_done(out: Path, key: str) -> bool:
+    return (out / "reason" / key).exists()
+
+
+def _write_chunk(out: Path, spec: MapSpec, iy: int, ix: int, result: dict) -> None:
+    c = spec.chunk
+    key = f"{iy}.{ix}"
+    for name in VARIABLES:  # reason last: it marks the chunk complete
+        dtype = np.dtype(_DTYPES[name])
+        fill = NOT_CONVERGED if name == "reason" else np.nan
+        block = np.full((c, c), fill, dtype)
+        part = result[name]
+        block[:part.shape[0], :part.shape[1]] = part
+        _write_atomic(out / name / key, block.tobytes())
+
+
+def read_store(out: Path) -> dict[str, np.ndarray]:
+    """The map's variables and axes from a store written here (numpy only)."""
+    out = Path(out)
+    data = {}
+    for name in ("x", "y", *VARIABLES):
+        meta = json.loads((out / name / ".zarray").read_text())
+        shape, chunks, dtype = meta["shape"], meta["chunks"], np.dtype(meta["dtype"])
+        fill = np.nan if meta["fill_value"] == "NaN" else meta["fill_value"]
+        arr = np.full(shape, fill, dtype)
+        if len(shape) == 1:
+            arr[:] = np.frombuffer((out / name / "0").read_bytes(), dtype)[:shape[0]]
+        else:
+            for iy in range(-(-shape[0] // chunks[0])):
+                for ix in range(-(-shape[1] // chunks[1])):
+                    f = out / name / f"{iy}.{ix}"
+                    if not f.exists():
+                        continue
+                    block = np.frombuffer(f.read_bytes(), dtype).reshape(chunks)
+                    ys, xs = iy * chunks[0], ix * chunks[1]
+                    h, w = min(chunks[0], shape[0] - ys), min(chunks[1], shape[1] - xs)
+                    arr[ys:ys + h, xs:xs + w] = block[:h, :w]
+        data[name] = arr
+    return data
+
+
+def run_map(spec: MapSpec, out: Path, progress: bool = True, devices=None) -> dict:
+    """Compute the map into the store ``out`` (resuming a partial one), this process's
+    chunks only when ``jax.distributed`` runs several processes. Returns counts."""
+    out = Path(out)
+    values = _grid_values(spec.point, spec.x, spec.y)
+    _init_store(out, spec)
+    p, count = jax.process_index(), jax.process_count()
+    mine = [(k, ij) for k, ij in enumerate(spec.chunks()) if k % count == p]
+    todo = [ij for _, ij in mine if not _chunk_done(out, f"{ij[0]}.{ij[1]}")]
+    bar = _progress(len(mine), len(mine) - len(todo), progress)
+    c = spec.chunk
+    try:
+        for iy, ix in todo:
+            block = values[iy * c:(iy + 1) * c, ix * c:(ix + 1) * c]
+            h, w = block.shape[:2]
+            res = solve_points(spec.point, block.reshape(h * w, -1), spec.n, devices)
+            _write_chunk(out, spec, iy, ix, {k: v.reshape(h, w) for k, v in res.items()})
+            bar.update(1)
+    finally:
+        bar.close()
+    return {"chunks": len(spec.chunks()), "this_process": len(mine),
+            "computed": len(todo), "resumed": len(mine) - len(todo)}
+
+
+class _NoBar:
+    def update(self, k):
+        pass
+
+    def close(self):
+        pass
+
+
+def _progress(total: int, done: int, enabled: bool):
+    import sys
+
+    if not enabled or not sys.stderr.isatty():
+        return _NoBar()
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=done, unit="chunk", desc="map", file=sys.stderr)

@@ -1,0 +1,179 @@
+"""Bistability maps: values against locate_folds, the on-disk store, resume after a kill,
+8 virtual devices and 2 processes identical to one."""
+
+import json
+import math
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from jaxrod.analysis.design_map import (
+    FOLD_BEYOND_90,
+    INVALID_INPUT,
+    NOT_BISTABLE,
+    OK,
+    Axis,
+    MapSpec,
+    read_store,
+    run_map,
+    solve_points,
+)
+from jaxrod.analysis.fold_curves import DesignPoint
+from jaxrod.analysis.magnet import locate_folds
+from jaxrod.params import NDFEB_MAGNET, ParameterError, preset
+from jaxrod.scenes.dipole import DipoleMagnet
+
+
+def _same(a, b):
+    """Identical maps: the same reasons and NaN pattern, angles equal to round-off (XLA may
+    vectorise a different batch shape differently: the fold angles' round-off floor is
+    ~1e-11 degrees)."""
+    np.testing.assert_array_equal(a["reason"], b["reason"])
+    for name in ("capture_deg", "release_deg", "width_deg"):
+        np.testing.assert_array_equal(np.isnan(a[name]), np.isnan(b[name]))
+        np.testing.assert_allclose(a[name], b[name], rtol=0, atol=1e-11, equal_nan=True)
+
+
+def _point():
+    rod, _ = preset("permanent-magnet")
+    return DesignPoint.from_physical(rod, NDFEB_MAGNET)
+
+
+#: A grid inside the bistable region (every point OK: the subprocess tests then compile the
+#: batched path only).
+BISTABLE_X, BISTABLE_Y = "track-radius:0.105:0.112:9", "E:150e9:250e9:7"
+CLI = [sys.executable, "-m", "jaxrod.cli", "map", "--preset", "permanent-magnet",
+       "--x", BISTABLE_X, "--y", BISTABLE_Y, "--chunk", "4", "--quiet", "--no-plot"]
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    out = tmp_path_factory.mktemp("map") / "ref"
+    spec = MapSpec(_point(), Axis.parse(BISTABLE_X), Axis.parse(BISTABLE_Y), chunk=4)
+    run_map(spec, out, progress=False)
+    return read_store(out)
+
+
+def test_every_tier_and_reason_against_locate_folds():
+    point = _point()
+    # rows: bistable; beyond the cusp (not bistable); magnet touching; small clearance with
+    # the upper fold beyond 90 degrees
+    names = point.names
+    rows = []
+    for R, E in ((0.11, 200e9), (0.135, 200e9), (0.099, 200e9), (0.1005, 80e9)):
+        v = list(point.values)
+        v[names.index("track-radius")], v[names.index("E")] = R, E
+        rows.append(v)
+    res = solve_points(point, np.array(rows))
+    assert list(res["reason"]) == [OK, NOT_BISTABLE, INVALID_INPUT, FOLD_BEYOND_90]
+    for i, v in enumerate(rows[:2]):
+        G, M, D = DesignPoint("physical", tuple(v)).groups()
+        rep = locate_folds(DipoleMagnet(G, M, D, 0.0))
+        if res["reason"][i] == OK:
+            low, up = rep.folds
+            assert abs(res["capture_deg"][i] - low.alpha_deg) < 1e-9
+            assert abs(res["release_deg"][i] - up.alpha_deg) < 1e-9
+        else:
+            assert rep.folds == [] and math.isnan(res["width_deg"][i])
+    assert np.isnan(res["capture_deg"][2:]).all()
+
+
+def test_store_opens_and_matches_solve_points(reference):
+    point = _point()
+    assert (reference["reason"] == OK).all()
+    iy, ix = 3, 5
+    v = list(point.values)
+    v[point.index("track-radius")] = reference["x"][ix]
+    v[point.index("E")] = reference["y"][iy]
+    one = solve_points(point, np.array([v]))
+    # another batch shape: the same solve to round-off
+    assert abs(one["capture_deg"][0] - reference["capture_deg"][iy, ix]) < 1e-12
+    assert reference["width_deg"].shape == (7, 9)
+
+
+def test_store_is_zarr_that_xarray_opens(reference, tmp_path):
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("zarr")
+    out = tmp_path / "z"
+    spec = MapSpec(_point(), Axis.parse(BISTABLE_X), Axis.parse(BISTABLE_Y), chunk=4)
+    run_map(spec, out, progress=False)
+    ds = xr.open_zarr(out, consolidated=False)
+    np.testing.assert_array_equal(ds["width_deg"].values, reference["width_deg"])
+    assert ds["capture_deg"].attrs["units"] == "degree" and "source" in ds.attrs
+
+
+def test_a_map_for_other_arguments_is_refused(tmp_path):
+    spec = MapSpec(_point(), Axis.parse("E:150e9:250e9:3"), Axis.parse("length:0.09:0.095:3"))
+    run_map(spec, tmp_path, progress=False)
+    other = MapSpec(_point(), Axis.parse("E:150e9:250e9:4"), Axis.parse("length:0.09:0.095:3"))
+    with pytest.raises(ParameterError, match="other arguments"):
+        run_map(other, tmp_path, progress=False)
+
+
+@pytest.mark.parametrize("text", ["E:1:2", "E:a:2:3", "E:1:1:3", "E:1:2:0", "E:inf:2:3"])
+def test_bad_axes(text):
+    with pytest.raises(ParameterError):
+        Axis.parse(text)
+
+
+def test_resume_after_kill_loses_nothing(reference, tmp_path):
+    out = tmp_path / "killed"
+    proc = subprocess.Popen([*CLI, "--out", str(out)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE)
+    chunks = lambda: [f for f in (out / "reason").glob("*") if f.name[0].isdigit()]
+    deadline = time.monotonic() + 600
+    while time.monotonic() < deadline and proc.poll() is None:
+        if len(chunks()) >= 2:  # two of six chunks written
+            break
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    done = len(chunks())
+    assert 2 <= done < 6, f"{done} chunks before the kill"
+    again = subprocess.run([*CLI, "--out", str(out), "--json"], capture_output=True, text=True,
+                           timeout=900)
+    assert again.returncode == 0, again.stderr
+    assert json.loads(again.stdout)["resumed"] == done
+    resumed = read_store(out)
+    for name in ("capture_deg", "release_deg", "width_deg", "reason"):  # same chunk shapes
+        np.testing.assert_array_equal(resumed[name], reference[name])
+
+
+def test_eight_devices_identical_to_one(reference, tmp_path):
+    out = tmp_path / "eight"
+    env = os.environ | {"XLA_FLAGS": "--xla_force_host_platform_device_count=8"}
+    code = ("import jax, json; from jaxrod.cli import main; import sys; "
+            "assert len(jax.local_devices()) == 8; "
+            f"sys.exit(main({[*CLI[3:], '--out', str(out)]!r}))")
+    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                          text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    _same(read_store(out), reference)
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_two_processes_identical_to_one(reference, tmp_path):
+    out = tmp_path / "two"
+    port = _free_port()
+    procs = [subprocess.Popen([*CLI, "--out", str(out), "--coordinator", f"127.0.0.1:{port}",
+                               "--num-processes", "2", "--process-id", str(i), "--json"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for i in (0, 1)]
+    outs = [p.communicate(timeout=900) for p in procs]
+    for p, (stdout, stderr) in zip(procs, outs, strict=True):
+        assert p.returncode == 0, stderr[-2000:]
+    summaries = [json.loads(stdout) for stdout, _ in outs]
+    assert sorted(s["process"] for s in summaries) == [0, 1]
+    assert sum(s["computed"] for s in summaries) == 6  # each its own chunks
+    _same(read_store(out), reference)
