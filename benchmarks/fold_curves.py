@@ -218,7 +218,7 @@ r2 = auto.run(lower, ICP=[4, 1], ISW=2)
 r3 = auto.run(r2, UZSTOP={{4: 1.5}}, STOP=["LP2"], NMX=4000, DSMAX={dsmax}, DS=0.01)
 wall = time.perf_counter() - t0
 curve = [[float(p["PAR(4)"]), float(p["PAR(1)"])] for p in r3[0]]
-lps = [[float(p["PAR(4)"]), float(p["PAR(1)"])] for p in r3("LP")]
+lps = [[float(p["PAR(4)"]), float(p["PAR(1)"]), int(p["PT"])] for p in r3("LP")]
 print("JAXROD-BENCH " + json.dumps({{"curve": curve, "lp": lps, "wall_s": wall}}))
 """
 
@@ -255,13 +255,17 @@ def run_auto(ntst: int, ncol: int, dsmax: float, repeat: int = 2) -> dict:
     last = runs[-1]
     second = [lp for lp in last["lp"] if lp[0] < 1.1 and lp[1] > 1.0]
     first = [lp for lp in last["lp"] if lp[0] > 1.2]
+    run_s = min(r["wall_s"] for r in runs[1:])
+    # the run goes on after the second cusp (to its next LP): the time to the second cusp,
+    # prorated by AUTO's point count there (its steps cost alike)
+    upto = abs(second[0][2]) / len(last["curve"]) if second else 1.0
     return {"ntst": ntst, "ncol": ncol, "dsmax": dsmax,
-            "run_s": min(r["wall_s"] for r in runs[1:]),
+            "run_s": run_s * upto, "run_s_whole": run_s,
             "cusp_D": first[0][0] if first else _auto_max_D(last["curve"]),
             "cusp_located": "LP" if first else "curve maximum",
             "second_cusp_D": second[0][0] if second else None,
             "second_cusp_alpha_deg": math.degrees(second[0][1]) if second else None,
-            "points": len(last["curve"])}
+            "points": abs(second[0][2]) if second else len(last["curve"])}
 
 
 # --- JaxCont -------------------------------------------------------------------------------
