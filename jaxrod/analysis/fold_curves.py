@@ -444,6 +444,34 @@ def _alpha_events(runs, observed, i, disc, vary_map, base, vary, v0, k) -> list[
     return events
 
 
+def trace_fold_curve(point: DesignPoint, vary: str, between: tuple[float, float],
+                     direction: float = 1.0, start: str = "lower", max_cusps: int = 2,
+                     n: int = DEFAULT_N):
+    """One fold curve followed round its cusps: from the ``start`` fold of ``point``, with
+    ``vary`` first moving in ``direction`` (+1 or -1), through up to ``max_cusps`` cusps (at
+    each the curve turns back in ``vary`` and continues as the other fold), while ``vary``
+    stays ``between`` the two values given. Returns (the values of ``vary`` along the run,
+    alpha* in degrees, the refined cusps in the order passed, the run's status message)."""
+    i = point.index(vary)
+    v0 = point.values[i]
+    lo, hi = sorted(check_target(point, vary, b) for b in between)
+    if not lo < v0 < hi:
+        raise ParameterError(f"between: {vary} = {v0!r} must lie inside ({lo!r}, {hi!r})")
+    w0, _ = _start(point, n)
+    runs, observed, disc, vary_map, base = _run(
+        point, vary, lo / v0 - 1.0, hi / v0 - 1.0, w0[[0 if start == "lower" else 1]],
+        [math.copysign(1.0, direction)], n, float(max_cusps))
+    k = int(runs.num_points[0])
+    test = np.asarray(runs.cusp_test[0][:k])
+    cusps = []
+    for j in _sign_changes(test):
+        near = j if abs(test[j]) < abs(test[j + 1]) else j + 1
+        cusps.append(_refine("cusp", runs.w[0][near], 0.0, disc, vary_map, base, vary, v0,
+                             "cusp"))
+    u, alpha = np.asarray(observed[0][0][:k]), np.asarray(observed[1][0][:k])
+    return v0 * (1.0 + u), np.degrees(alpha), cusps, CURVE_STATUS[int(runs.status[0])]
+
+
 #: How far ``find_cusp`` looks: the varied input within a factor 20 of its start.
 CUSP_SEARCH = (-0.95, 19.0)
 
