@@ -26,15 +26,18 @@ chunk is complete when its ``reason`` file exists (written last, atomically): a 
 started again with the same arguments skips the complete chunks and loses nothing.
 
 Scale-out uses JAX's own machinery: a chunk's points are laid out over all local devices
-with a ``jax.sharding.NamedSharding`` (one mesh axis, the points), so XLA runs each device's
-share; with ``jax.distributed`` initialised, process p of P computes and writes the chunks
-whose index is p modulo P (the store's metadata is written by every process, identically).
+with a ``jax.sharding.NamedSharding`` (one mesh axis, the points) and ``jax.shard_map`` runs
+the batched program on each device's share independently (the retry tiers, a small share
+of a map, run on the first device); with ``jax.distributed`` initialised, process p of P
+computes and writes the chunks whose index is p modulo P (the store's metadata is written
+by every process, identically).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import datetime
+import functools
 import json
 import math
 import os
@@ -178,17 +181,26 @@ def _retry_program(G, M, D, n):
     return jax.vmap(lambda g, m, d: _retry_one(g, m, d, disc))(G, M, D)
 
 
-_chunk = jax.jit(_chunk_program, static_argnames=("n",))
 _retry = jax.jit(_retry_program, static_argnames=("n",))
 
 
-def _sharded(arrays, devices):
-    """Pad the 1-D arrays to a multiple of the device count and lay them out over a one-axis
-    mesh of ``devices`` (the points split between devices)."""
-    k = arrays[0].shape[0]
-    nd = len(devices)
-    pad = (-k) % nd
+@functools.lru_cache(maxsize=16)
+def _per_device(devices: tuple, n: int):
+    """The batched fold-pair program as one independent program per device
+    (``jax.shard_map`` over a one-axis mesh of the points): each device runs its own Newton
+    loops to its own slowest point, with no collective in the loop conditions."""
     mesh = jax.sharding.Mesh(np.asarray(devices), ("points",))
+    spec = jax.sharding.PartitionSpec("points")
+    fn = functools.partial(_chunk_program, n=n)
+    return jax.jit(jax.shard_map(fn, mesh=mesh, in_specs=(spec, spec, spec),
+                                 out_specs=(spec, spec), check_vma=False)), mesh
+
+
+def _sharded(arrays, mesh):
+    """Pad the 1-D arrays to a multiple of the mesh's device count and lay them out over it
+    (the points split between devices)."""
+    k = arrays[0].shape[0]
+    pad = (-k) % mesh.size
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("points"))
     # padding repeats the first point (a valid parameter set), dropped afterwards
     return [jax.device_put(np.concatenate([a, np.repeat(a[:1], pad)]), sharding)
@@ -209,15 +221,17 @@ def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
     alphas = np.full((k, 2), np.nan)
     reason = np.where(valid, NOT_CONVERGED, INVALID_INPUT).astype(np.int8)
     if valid.any():
-        inputs, _ = _sharded([G, M, D], devices)
-        a, ok = jax.device_get(_chunk(*inputs, n=n))
+        program, mesh = _per_device(tuple(devices), n)
+        inputs, _ = _sharded([G, M, D], mesh)
+        a, ok = jax.device_get(program(*inputs))
         a, ok = np.asarray(a)[:k], np.asarray(ok)[:k] & valid
         alphas[ok] = a[ok]
         reason[ok] = OK
         retry = np.nonzero(valid & ~ok)[0]
         if retry.size:
-            inputs, _ = _sharded([G[retry], M[retry], D[retry]], devices)
-            a2, code = jax.device_get(_retry(*inputs, n=n))
+            # on one device (a small share of a map)
+            with jax.default_device(devices[0]):
+                a2, code = jax.device_get(_retry(G[retry], M[retry], D[retry], n=n))
             a2, code = np.asarray(a2)[:retry.size], np.asarray(code)[:retry.size]
             good = code == OK
             alphas[retry[good]] = a2[good]
