@@ -31,6 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.analysis.magnet import DEFAULT_N, locate_folds
+from jaxrod.analysis.reduction import mean_functional
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import (
     GROUP_NAMES,
@@ -189,16 +190,11 @@ EVENTS = {"cusp": quadratic_coefficient, "alpha": parameter_lam, "value": parame
 def _event_program(w0, base, disc, target, vary, kind):
     res = event_solve(ALPHA_MODEL, vary, w0, (base, disc), EVENTS[kind], target, tol=1e-13)
     report = _observables(res.x, vary, base, disc)
-    cubic = cubic_coefficient(res.x, _mean_row(disc), ALPHA_MODEL, vary, (base, disc))
+    cubic = cubic_coefficient(res.x, mean_functional(disc), ALPHA_MODEL, vary, (base, disc))
     return res, report, cubic
 
 
 _event = StoredProgram("fold-curve-event", _event_program, static_argnames=("vary", "kind"))
-
-
-def _mean_row(disc: PlanarDiscretisation):
-    """c with c . theta = int theta (the reduced coordinate q)."""
-    return disc.quad_weights @ disc.to_quad
 
 
 @dataclasses.dataclass(frozen=True)
@@ -294,7 +290,7 @@ CURVE_CAPACITY = 512
 def valid_range(point: DesignPoint, name: str) -> tuple[float, float]:
     """The open interval of the input ``name`` (others fixed) where the point is valid:
     positive inputs, and a magnet that clears the rod (D > 1 + a / L)."""
-    i = point.index(name)
+    point.index(name)  # validates the name
     v = point.values
     if point.kind == "groups":
         if name == "D":
@@ -307,7 +303,6 @@ def valid_range(point: DesignPoint, name: str) -> tuple[float, float]:
         return 0.0, R - 0.5 * d_magnet
     if name == "magnet-diameter":
         return 0.0, 2.0 * (R - L)
-    del i
     return 0.0, math.inf
 
 
