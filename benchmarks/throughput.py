@@ -26,7 +26,7 @@ import jax
 import numpy as np
 
 import jaxrod  # noqa: F401
-from jaxrod.analysis.batch import fold_pairs
+from jaxrod.analysis.batch import fold_pairs, fold_pairs_program
 from jaxrod.analysis.magnet import fold_angles
 
 HERE = Path(__file__).resolve().parent
@@ -61,7 +61,7 @@ def timed(fn, repeat):
 def memory_per_set(K: int, dtype: str) -> float | None:
     G, M, D = parameter_sets(K)
     try:
-        compiled = fold_pairs.lower(G, M, D, dtype=dtype).compile()
+        compiled = fold_pairs_program.lower(G, M, D, dtype=dtype).compile()
         mem = compiled.memory_analysis()
         total = mem.temp_size_in_bytes + mem.argument_size_in_bytes + mem.output_size_in_bytes
         return total / K

@@ -8,10 +8,13 @@ input exits with status 2 and a one-line message naming the parameter.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
+import re
 import sys
+import textwrap
 from pathlib import Path
 
 from jaxrod.params import (
@@ -20,9 +23,12 @@ from jaxrod.params import (
     NDFEB_MAGNET,
     NICKEL,
     PHYSICAL_NAMES,
+    RANGES,
     Magnet,
     ParameterError,
     Rod,
+    check,
+    check_degree,
     preset,
 )
 
@@ -47,73 +53,168 @@ def _enable_compilation_cache() -> None:
         pass
 
 
-def _float(name: str):
+def _float(name: str, valid: str | None = None):
+    """An option's parser: a finite number, within ``RANGES[valid]`` when given."""
+
     def parse(text: str) -> float:
         try:
             value = float(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{name} must be a number, got {text!r}") from None
-        if math.isnan(value):
-            raise argparse.ArgumentTypeError(f"{name} must be a number, got NaN")
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{name} must be a finite number, got {text!r}")
+        if valid is not None:
+            try:
+                RANGES[valid].check(value)
+            except ParameterError as err:
+                raise argparse.ArgumentTypeError(str(err)) from None
         return value
 
     return parse
 
 
-def _rod_from_args(args) -> tuple[Rod, str] | None:
+def _degree(valid: str):
+    """The --n parser: an integer Chebyshev degree within ``RANGES[valid]``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"N (Chebyshev degree) must be an integer, got {text!r}") from None
+        try:
+            return check_degree(value, valid)
+        except ParameterError as err:
+            raise argparse.ArgumentTypeError(str(err)) from None
+
+    return parse
+
+
+def _derived(name: str, value: float, inputs: str) -> float:
+    """A group computed from physical inputs, checked against its range."""
+    try:
+        return check(name, value)
+    except ParameterError:
+        r = RANGES[name]
+        raise ParameterError(f"{r.label} = {value:.4g} from {inputs} is outside "
+                             f"{r.interval()} ({r.why})") from None
+
+
+def _entry(value, unit: str, source: str) -> dict:
+    return {"value": value, "unit": unit, "source": source}
+
+
+def _source(args, attr: str, fallback: str) -> str:
+    return "given" if getattr(args, attr, None) is not None else fallback
+
+
+def _rod_inputs(args, rod: Rod, fallback: str) -> dict:
+    """The wire's inputs as used: value, unit and source (given, preset or default)."""
+    m = rod.material
+    material = "default: the paper's nickel"
+    return {
+        "E": _entry(m.youngs_modulus, "Pa", _source(args, "E", "default: 200 GPa")),
+        "diameter": _entry(rod.diameter, "m", _source(args, "diameter", fallback)),
+        "length": _entry(rod.length, "m", _source(args, "length", fallback)),
+        "density": _entry(m.density, "kg/m^3", material),
+        "gravity": _entry(rod.gravity, "m/s^2", "default: 9.81"),
+        "rod-magnetisation": _entry(m.saturation_magnetisation, "A/m",
+                                    _source(args, "rod_magnetisation", material)),
+    }
+
+
+def _inputs_line(inputs: dict) -> str:
+    """One line of the inputs used, with units and, where not given, their source."""
+    parts = []
+    for name, e in inputs.items():
+        value = e["value"] if isinstance(e["value"], str) else f"{e['value']:.6g}"
+        unit = f" {e['unit']}" if e["unit"] else ""
+        source = "" if e["source"] == "given" else f" ({e['source']})"
+        parts.append(f"{name} = {value}{unit}{source}")
+    return textwrap.fill("inputs: " + ", ".join(parts), width=100, subsequent_indent="  ",
+                         break_long_words=False, break_on_hyphens=False)
+
+
+def _rod_from_args(args) -> tuple[Rod, str, dict] | None:
     physical = (args.preset, args.E, args.diameter, args.length)
     if all(v is None for v in physical):
         return None
-    if args.G is not None:
-        raise ParameterError("G: give either --G or physical inputs (--preset/--E/--diameter/"
-                             "--length), not both")
+    if args.G is not None or args.A is not None:
+        raise ParameterError(f"{'G' if args.G is not None else 'A'}: give either the groups "
+                             "(--G, --A) or physical inputs (--preset/--E/--diameter/--length "
+                             "with --field on/off), not both")
     E = args.E if args.E is not None else NICKEL.youngs_modulus
     if args.preset is not None:
         rod, support = preset(args.preset, E)
+        fallback = f"preset {args.preset}"
     else:
         if args.diameter is None or args.length is None:
             raise ParameterError("diameter/length: physical input needs both --diameter and "
                                  "--length (m), or a --preset")
         rod, support = Rod(NICKEL.with_youngs_modulus(E), args.diameter, args.length), None
+        fallback = "given"
     if args.diameter is not None:
         rod = Rod(rod.material, args.diameter, rod.length)
     if args.length is not None:
         rod = rod.with_length(args.length)
-    return rod, support
+    return rod, support, _rod_inputs(args, rod, fallback)
 
 
 def cmd_greenhill(args) -> int:
     from jaxrod.analysis.greenhill import critical_length, greenhill
 
+    args.field_given = args.field is not None
+    args.field = args.field or "on"
     physical = _rod_from_args(args)
+    if physical is None and args.field_given:
+        raise ParameterError("field: --field applies to physical inputs; with --G give --A "
+                             "(A = 0 is the field off)")
     extra = {}
     A = args.A
     support = args.support
     if physical is not None:
-        rod, preset_support = physical
+        rod, preset_support, inputs = physical
         if support is None:
             support = preset_support or "clamped"
-        G = rod.G
-        if A is None:
-            A = rod.A(args.field == "on")
-        extra = {
-            "E_Pa": rod.material.youngs_modulus, "diameter_m": rod.diameter,
-            "length_m": rod.length, "field": args.field,
-            "L_crit_m": critical_length(rod, support, field_on=args.field == "on"),
-            "L_stab_m": rod.stabilisation_length,
-        }
+        field_on = args.field == "on"
+        G = _derived("G", rod.G, "E, diameter and length")
+        A = _derived("A", rod.A(field_on), "E, K_d, diameter and length")
+        inputs["field"] = _entry(
+            "on (saturating uniform field: A = 4 K_d L^2 / (E b^2))" if field_on else
+            "off (A = 0)", "", "given" if args.field_given else "default")
+        inputs["anisotropy"] = _entry(rod.material.anisotropy_constant, "J/m^3",
+                                      "default: the paper's nickel")
+        extra = {"L_crit_m": critical_length(rod, support, field_on=field_on),
+                 "L_stab_m": rod.stabilisation_length}
     else:
         if args.G is None:
             raise ParameterError("G: give --G (gravity group, > 0) or physical inputs "
                                  "(--preset, or --diameter and --length)")
         G = args.G
+        inputs = {"G": _entry(G, "", "given")}
+        if A is not None:
+            inputs["A"] = _entry(A, "", "given")
         support = support or "clamped"
+    inputs["support"] = _entry(support, "", _source(args, "support", "default"
+                                                    if physical is None or not args.preset
+                                                    else f"preset {args.preset}"))
     result = greenhill(G, support, A, n=args.n)
-    out = result.as_dict() | extra
+    inputs["N"] = _entry(result.n, "", "given" if args.n is not None else "default: from G")
+    out = result.as_dict() | extra | {"inputs": inputs}
+    bad = [k for k in ("beta0", "A2", "G_crit") if not math.isfinite(getattr(result, k))]
+    bad += [k for k, v in extra.items() if not math.isfinite(v)]
+    if bad:
+        message = (f"greenhill: {', '.join(bad)} not finite at N = {result.n}: the "
+                   "eigenvalue solve failed (lower N, or G within its range)")
+        if args.json:
+            print(json.dumps(out | {"converged": False, "message": message}, default=str))
+        print(f"jaxrod greenhill: {message}", file=sys.stderr)
+        return 1
     if args.json:
-        print(json.dumps(out))
+        print(json.dumps(out | {"converged": True}))
         return 0
     lines = [
+        _inputs_line(inputs),
         f"support      {result.support}",
         f"G            {result.G:.12g}",
         f"beta0        {result.beta0:.15g}",
@@ -126,66 +227,100 @@ def cmd_greenhill(args) -> int:
         lines.append(f"straight rod {'STABLE' if result.stable else 'UNSTABLE (buckles)'}"
                      f"   (A - A_crit = {result.A - result.A_crit:.6g})")
     if extra:
-        lines.append(f"L_crit       {extra['L_crit_m']:.6g} m   (field {args.field})")
+        field = ("on: A = 4 K_d L^2 / (E b^2)" if args.field == "on" else "off: A = 0")
+        lines.append(f"L_crit       {extra['L_crit_m']:.6g} m   (field {field})")
         lines.append(f"L_stab       {extra['L_stab_m']:.6g} m   (K_d / (rho g))")
     print("\n".join(lines))
     return 0
 
 
-def _magnet_physical_from_args(args) -> tuple[Rod, Magnet] | None:
-    """(rod, magnet) from --preset/--E/--diameter/--length/--magnet-diameter/--track-radius,
-    or None when only the groups are given."""
-    physical = any(v is not None for v in (args.preset, args.E, args.length, args.diameter,
-                                            args.magnet_diameter, args.track_radius))
-    if not physical:
+_MAGNET_PHYSICAL = ("preset", "E", "length", "diameter", "magnet_diameter", "track_radius",
+                    "remanence", "rod_magnetisation")
+
+
+def _magnet_physical_from_args(args) -> tuple[Rod, Magnet, dict] | None:
+    """(rod, magnet, inputs used) from --preset/--E/--diameter/--length/--magnet-diameter/
+    --track-radius/--remanence/--rod-magnetisation, or None when only the groups are given.
+    Inputs not given are the paper's permanent-magnet experiment's."""
+    if all(getattr(args, k) is None for k in _MAGNET_PHYSICAL):
         return None
-    if any(v is not None for v in (args.G, args.M, args.D)):
-        raise ParameterError("G/M/D: give either the groups --G --M --D or physical inputs "
-                             "(--preset/--E/--length/...), not both")
+    if any(v is not None for v in (args.G, args.M, args.D, args.magnet_radius)):
+        raise ParameterError("G/M/D: give either the groups --G --M --D (--magnet-radius) or "
+                             "physical inputs (--preset/--E/--length/...), not both")
     E = args.E if args.E is not None else NICKEL.youngs_modulus
-    rod, _ = preset(args.preset or "permanent-magnet", E)
+    rod, _ = preset("permanent-magnet", E)
+    if args.rod_magnetisation is not None:
+        rod = dataclasses.replace(rod, material=dataclasses.replace(
+            rod.material, saturation_magnetisation=args.rod_magnetisation))
     if args.diameter is not None:
         rod = Rod(rod.material, args.diameter, rod.length)
     if args.length is not None:
         rod = rod.with_length(args.length)
-    magnet = Magnet(
-        diameter=NDFEB_MAGNET.diameter if args.magnet_diameter is None else args.magnet_diameter,
-        saturation_magnetisation=NDFEB_MAGNET.saturation_magnetisation,
-        track_radius=NDFEB_MAGNET.track_radius if args.track_radius is None
-        else args.track_radius)
-    return rod, magnet
+    pick = lambda given, default: default if given is None else given
+    magnet = Magnet(diameter=pick(args.magnet_diameter, NDFEB_MAGNET.diameter),
+                    remanence=pick(args.remanence, NDFEB_MAGNET.remanence),
+                    track_radius=pick(args.track_radius, NDFEB_MAGNET.track_radius))
+    fallback = "preset permanent-magnet"
+    inputs = _rod_inputs(args, rod, fallback) | {
+        "remanence": _entry(magnet.remanence, "A/m", _source(args, "remanence", fallback)),
+        "magnet-diameter": _entry(magnet.diameter, "m",
+                                  _source(args, "magnet_diameter", fallback)),
+        "track-radius": _entry(magnet.track_radius, "m",
+                               _source(args, "track_radius", fallback)),
+    }
+    return rod, magnet, inputs
 
 
 def _magnet_groups_from_args(args):
-    """(G, M, D, magnet radius a/L or None) from the groups or the physical inputs."""
+    """(G, M, D, magnet radius a/L or None, inputs used) from the groups or the physical
+    inputs; the groups from physical inputs are checked against their ranges."""
     physical = _magnet_physical_from_args(args)
     if physical is not None:
-        rod, magnet = physical
-        return rod.G, rod.M(magnet), rod.D(magnet), 0.5 * magnet.diameter / rod.length
+        rod, magnet, inputs = physical
+        G = _derived("G-magnet", rod.G, "E, diameter and length")
+        M = _derived("M", rod.M(magnet), "the wire's and the magnet's inputs")
+        D = rod.D(magnet)
+        return G, M, D, 0.5 * magnet.diameter / rod.length, inputs
     missing = [k for k in ("G", "M", "D") if getattr(args, k) is None]
     if missing:
         raise ParameterError(f"{'/'.join(missing)}: give --G, --M and --D (or physical "
                              "inputs such as --preset permanent-magnet --E 200e9)")
-    return args.G, args.M, args.D, args.magnet_radius
+    inputs = {k: _entry(getattr(args, k), "", "given") for k in ("G", "M", "D")}
+    if args.magnet_radius is not None:
+        inputs["magnet-radius"] = _entry(args.magnet_radius, "", "given")
+    return args.G, args.M, args.D, args.magnet_radius, inputs
+
+
+def _with_n(inputs: dict, args) -> dict:
+    return inputs | {"N": _entry(args.n, "", "default" if args.n_default else "given")}
+
+
+def _header(info: dict) -> str:
+    """The first line(s) of a magnet-scene report: the inputs used and the groups."""
+    inputs = info["inputs"]
+    groups = (f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.10g}, "
+              f"N = {inputs['N']['value']}")
+    return (_inputs_line(inputs) + "\n" if "E" in inputs else "") + groups
 
 
 def _magnet_scene_from_args(args):
-    """(scene, description dict) from --G/--M/--D or physical inputs."""
+    """(scene, description dict with the groups and the inputs used)."""
     from jaxrod.analysis.magnet import make_scene
 
-    G, M, D, radius = _magnet_groups_from_args(args)
+    G, M, D, radius, inputs = _magnet_groups_from_args(args)
     scene = make_scene(G, M, D, radius)
-    return scene, {"G": G, "M": M, "D": D}
+    return scene, {"G": G, "M": M, "D": D, "inputs": _with_n(inputs, args)}
 
 
 def _design_point_from_args(args):
+    """(DesignPoint, inputs used)."""
     from jaxrod.analysis.fold_curves import DesignPoint
 
+    G, M, D, radius, inputs = _magnet_groups_from_args(args)
     physical = _magnet_physical_from_args(args)
     if physical is not None:
-        return DesignPoint.from_physical(*physical)
-    G, M, D, radius = _magnet_groups_from_args(args)
-    return DesignPoint.from_groups(G, M, D, radius)
+        return DesignPoint.from_physical(*physical[:2]), _with_n(inputs, args)
+    return DesignPoint.from_groups(G, M, D, radius), _with_n(inputs, args)
 
 
 def _fmt_cusp(c) -> str:
@@ -197,13 +332,13 @@ def _fmt_cusp(c) -> str:
 def cmd_cusp(args) -> int:
     from jaxrod.analysis.fold_curves import find_cusp
 
-    point = _design_point_from_args(args)
+    point, inputs = _design_point_from_args(args)
     point.index(args.vary)
     cusp = find_cusp(point, args.vary, n=args.n)
     found = cusp.kind == "cusp"
     out = {"vary": args.vary, "cusp": cusp.as_dict() if found else None,
            "converged": bool(found and cusp.converged), "n": args.n,
-           "point": point.as_dict()}
+           "point": point.as_dict(), "inputs": inputs}
     if not found:
         out["message"] = (f"no cusp found varying {args.vary} within a factor 20 of its "
                           "starting value (the fold curves leave the valid range first)")
@@ -211,8 +346,7 @@ def cmd_cusp(args) -> int:
         print(json.dumps(out))
     else:
         G, M, D = point.groups()
-        print(f"from G = {G:.8g}, M = {M:.8g}, D = {D:.10g} (N = {args.n}), varying "
-              f"{args.vary}")
+        print(_header({"G": G, "M": M, "D": D, "inputs": inputs}) + f", varying {args.vary}")
         print(_fmt_cusp(cusp) if found else out["message"])
         if found:
             print(f"converged: {cusp.converged} (residual {cusp.residual_norm:.2g}, "
@@ -223,11 +357,11 @@ def cmd_cusp(args) -> int:
 def cmd_foldcurve(args) -> int:
     from jaxrod.analysis.fold_curves import fold_curves
 
-    point = _design_point_from_args(args)
+    point, inputs = _design_point_from_args(args)
     point.index(args.vary)
     out_dir = _output_dir(args.out) if args.out else None
     curves = fold_curves(point, args.vary, args.to, n=args.n)
-    summary = curves.as_dict()
+    summary = curves.as_dict() | {"inputs": inputs}
     if out_dir is not None:
         _write_fold_curves(curves, out_dir)
     if args.json:
@@ -235,8 +369,8 @@ def cmd_foldcurve(args) -> int:
                          | {"points": {c.start: len(c.value) for c in curves.curves}}))
     else:
         G, M, D = point.groups()
-        print(f"from G = {G:.8g}, M = {M:.8g}, D = {D:.10g} (N = {args.n}), {args.vary} -> "
-              f"{args.to:g}")
+        print(_header({"G": G, "M": M, "D": D, "inputs": inputs})
+              + f", {args.vary} -> {args.to:g}")
         for c in curves.curves:
             print(f"{c.start} fold: {len(c.value)} points, {args.vary} from {c.value[0]:.8g} "
                   f"to {c.value[-1]:.8g}, alpha* from {c.alpha_deg[0]:.6f} to "
@@ -266,7 +400,7 @@ def cmd_map(args) -> int:
 
     from jaxrod.analysis.design_map import Axis, MapSpec, read_store, run_map
 
-    point = _design_point_from_args(args)
+    point, inputs = _design_point_from_args(args)
     x, y = Axis.parse(args.x), Axis.parse(args.y)
     point.index(x.name)
     point.index(y.name)
@@ -283,7 +417,8 @@ def cmd_map(args) -> int:
     import jax
 
     summary = {"out": str(out), "x": x.name, "y": y.name, "points": x.count * y.count,
-               "process": jax.process_index(), "processes": jax.process_count()} | counts
+               "process": jax.process_index(), "processes": jax.process_count(),
+               "inputs": inputs} | counts
     if jax.process_index() == 0 and jax.process_count() == 1:
         data = read_store(out)
         reasons = np.bincount(data["reason"].ravel().astype(int), minlength=5)
@@ -371,8 +506,8 @@ def cmd_folds(args) -> int:
         out["note"] = NO_FOLD_NOTE
     if args.json:
         print(json.dumps(out))
-        return 0
-    print(f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.8g}, N = {report.n}")
+        return 0 if report.converged else 1
+    print(_header(info))
     if not report.folds:
         print(out["note"])
     for f in report.folds:
@@ -382,7 +517,16 @@ def cmd_folds(args) -> int:
     if report.hysteresis_width_deg is not None:
         print(f"hysteresis width = {report.hysteresis_width_deg:.10f} deg")
     print(f"converged: {report.converged}")
+    if not report.converged:
+        _not_converged("folds", "; ".join(
+            list(report.problems) + [f"{f.kind} fold: converged {f.converged}, residual "
+                                     f"{f.residual_norm:.2e}, {f.iterations} iterations"
+                                     for f in report.folds]) or "no fold solve converged")
     return 0 if report.converged else 1
+
+
+def _not_converged(command: str, why: str) -> None:
+    print(f"jaxrod {command}: not converged: {why}", file=sys.stderr)
 
 
 NO_FOLD_NOTE = ("no fold on the branch through the straight rod for alpha in (0, 90] degrees: "
@@ -402,8 +546,8 @@ def _folds_reduced(scene, info, args) -> int:
         out["note"] = NO_FOLD_NOTE + " (one-mode diagram)"
     if args.json:
         print(json.dumps(out))
-        return 0
-    print(f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.8g}, N = {args.n}, "
+        return 0 if out["converged"] else 1
+    print(_header(info) + ", "
           "reduced route (F = dF/dq = 0)")
     if not folds:
         print(out["note"])
@@ -434,8 +578,6 @@ def cmd_outofplane(args) -> int:
         theta, alpha, stable = branch.theta, branch.alpha, branch.stable
     else:
         a = np.radians(args.alpha)
-        if not -90.0 <= args.alpha <= 90.0:
-            raise ParameterError(f"alpha: must lie in [-90, 90] degrees, got {args.alpha}")
         crossing = np.nonzero((branch.alpha[:-1] - a) * (branch.alpha[1:] - a) <= 0.0)[0]
         theta, alpha, stable = [], [], []
         for i in crossing:
@@ -461,7 +603,7 @@ def cmd_outofplane(args) -> int:
     if args.json:
         print(json.dumps(out))
         return 0
-    print(f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.8g}, N = {args.n}: "
+    print(_header(info) + f": "
           f"{len(rows)} planar equilibria")
     print(f"{'alpha deg':>11} {'planar':>8} {'min eig perp':>13} {'(formula)':>11} "
           f"{'min eig plane':>14} {'coupling':>9}")
@@ -484,7 +626,7 @@ def cmd_certify(args) -> int:
         print(json.dumps(out))
         return 0
     mark = lambda ok: "holds " if ok else "FAILS "
-    print(f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.8g}, N = {args.n}")
+    print(_header(info))
     print("scene:")
     for v in out["scene"]:
         print(f"  {mark(v['holds'])} {v['name']:38s} margin {v['margin']:+.4g}  ({v['detail']})")
@@ -515,47 +657,88 @@ def cmd_branch(args) -> int:
     from jaxrod.plotting import diagram_figure
 
     scene, info = _magnet_scene_from_args(args)
+    out_dir = _output_dir(args.out)
     report = locate_folds(scene, n=args.n)
-    out_dir = Path(args.out)
-    out_dir.mkdir(parents=True, exist_ok=True)
     report.branch.write_csv(out_dir / "branch.csv")
     diagram_figure(report).savefig(out_dir / "branch.png", dpi=120)
     summary = info | report.as_dict() | {"points": len(report.branch)}
     (out_dir / "branch.json").write_text(json.dumps(summary, indent=2))
     print(json.dumps(summary) if args.json else
-          f"{len(report.branch)} branch points, {len(report.folds)} folds with alpha > 0; "
-          f"wrote {out_dir / 'branch.csv'}, branch.png, branch.json")
+          f"{_header(info)}\n{len(report.branch)} branch points, {len(report.folds)} folds "
+          f"with alpha > 0; wrote {out_dir / 'branch.csv'}, branch.png, branch.json")
+    if not report.converged:
+        _not_converged("branch", "; ".join(report.problems) or "a fold solve failed")
     return 0 if report.converged else 1
 
 
-def cmd_sweep(args) -> int:
-    from jaxrod.analysis.magnet import hysteresis_sweep, locate_folds
-    from jaxrod.plotting import hysteresis_figure
-
-    scene, info = _magnet_scene_from_args(args)
-    sweep = hysteresis_sweep(scene, n=args.n, alpha_max_deg=args.alpha_max,
-                             step_deg=args.step)
-    report = locate_folds(scene, n=args.n)
-    out_dir = Path(args.out)
-    out_dir.mkdir(parents=True, exist_ok=True)
+def _write_sweep(out_dir: Path, sweep: dict, summary: dict) -> None:
     with open(out_dir / "sweep.csv", "w") as fh:
+        if not sweep["complete"]:
+            fh.write(f"# incomplete: {sweep['reason']}\n")
         fh.write("direction,alpha_deg,tip_deg,q,snapped\n")
         for i in range(sweep["alpha_deg"].size):
             fh.write(f"{sweep['direction'][i]},{sweep['alpha_deg'][i]:.10g},"
                      f"{sweep['tip_deg'][i]:.10g},{sweep['q'][i]:.10g},"
                      f"{int(sweep['snapped'][i])}\n")
-    hysteresis_figure(sweep, report).savefig(out_dir / "sweep.png", dpi=120)
+    (out_dir / "sweep.json").write_text(json.dumps(summary, indent=2))
+
+
+def cmd_sweep(args) -> int:
+    from jaxrod.analysis.magnet import hysteresis_sweep, locate_folds
+    from jaxrod.plotting import hysteresis_figure
+    from jaxrod.progress import Interrupted, progress_bar
+
+    scene, info = _magnet_scene_from_args(args)
+    out_dir = _output_dir(args.out)
+    for name, default in (("alpha_max", 50.0), ("step", 0.25)):
+        info["inputs"][name.replace("_", "-")] = _entry(
+            default if getattr(args, name) is None else getattr(args, name), "deg",
+            _source(args, name, "default"))
+        if getattr(args, name) is None:
+            setattr(args, name, default)
+    total = None
+    bar = None
+
+    def progress(done, of):
+        nonlocal bar, total
+        if bar is None:
+            bar, total = progress_bar(of, "sweep", "position", not args.quiet), 0
+        bar.update(done - total)
+        total = done
+
+    try:
+        sweep = hysteresis_sweep(scene, n=args.n, alpha_max_deg=args.alpha_max,
+                                 step_deg=args.step, progress=progress)
+    except Interrupted as stop:
+        if bar is not None:
+            bar.close()
+        sweep = stop.partial
+        summary = info | {"snaps": sweep["snaps"], "converged": sweep["converged"],
+                          "complete": False, "reason": sweep["reason"],
+                          "positions": int(sweep["alpha_deg"].size)}
+        _write_sweep(out_dir, sweep, summary)
+        print(f"jaxrod sweep: {sweep['reason']}; wrote what was computed to "
+              f"{out_dir / 'sweep.csv'} and sweep.json (marked incomplete)", file=sys.stderr)
+        return 130
+    if bar is not None:
+        bar.close()
+    report = locate_folds(scene, n=args.n)
     summary = info | {"snaps": sweep["snaps"], "converged": sweep["converged"],
+                      "complete": True, "positions": int(sweep["alpha_deg"].size),
                       "folds": [f.as_dict() for f in report.folds],
                       "hysteresis_width_deg": report.hysteresis_width_deg}
-    (out_dir / "sweep.json").write_text(json.dumps(summary, indent=2))
+    _write_sweep(out_dir, sweep, summary)
+    hysteresis_figure(sweep, report).savefig(out_dir / "sweep.png", dpi=120)
     if args.json:
         print(json.dumps(summary))
     else:
+        print(_header(info))
         for snap in sweep["snaps"]:
             print(f"{snap['direction']}: snap at alpha = {snap['alpha_deg']:.4f} deg "
                   f"(tip {snap['tip_before_deg']:.3f} -> {snap['tip_after_deg']:.3f} deg)")
         print(f"wrote {out_dir / 'sweep.csv'}, sweep.png, sweep.json")
+    if not sweep["converged"]:
+        _not_converged("sweep", "a Newton step or an energy descent did not converge")
     return 0 if sweep["converged"] else 1
 
 
@@ -576,31 +759,54 @@ def cmd_fit(args) -> int:
     if len(measured) != 4:
         raise ParameterError(f"angles: --angles takes 4 values ({', '.join(ANGLE_NAMES)}), "
                              f"got {len(measured)}")
+    args.preset_given, args.sigma_given = args.preset is not None, args.sigma_deg is not None
+    args.preset = args.preset or "permanent-magnet"
+    args.sigma_deg = 1.0 if args.sigma_deg is None else args.sigma_deg
     setup = setup_from_preset(args.preset)
     if args.D is not None:
         setup = FitSetup(setup.G_ref, setup.M_ref, args.D, setup.E_ref)
     result = fit_youngs_modulus(measured, args.sigma_deg, args.offset, setup)
+    inputs = {"preset": _entry(args.preset, "", "given" if args.preset_given else "default"),
+              "G_ref": _entry(setup.G_ref, "", f"preset {args.preset}"),
+              "M_ref": _entry(setup.M_ref, "", f"preset {args.preset}"),
+              "D": _entry(setup.D, "", _source(args, "D", f"preset {args.preset}")),
+              "E_ref": _entry(setup.E_ref, "Pa", f"preset {args.preset}"),
+              "sigma-deg": _entry(args.sigma_deg, "deg", "given" if args.sigma_given
+                                  else "default"),
+              "offset": _entry("fitted" if args.offset else "fixed at 0", "", "given"
+                               if args.offset else "default")}
     if args.json:
-        print(json.dumps(dict(result)))
+        print(json.dumps(dict(result) | {"inputs": inputs}))
+        if not result["converged"]:
+            _not_converged("fit", result["reason"])
         return 0 if result["converged"] else 1
+    print(_inputs_line(inputs))
+    if not result["converged"]:
+        print(f"NOT CONVERGED after {result['iterations']} iterations: {result['reason']}")
+        print(f"last iterate (not an estimate): E = {result['E_Pa'] / 1e9:.4f} GPa")
+        _not_converged("fit", result["reason"])
+        return 1
     print(f"E = {result['E_Pa'] / 1e9:.4f} +- {result['E_std_Pa'] / 1e9:.4f} GPa "
-          f"(sigma = {args.sigma_deg} deg per angle)")
+          f"(1 standard deviation, Gauss-Newton, sigma = {args.sigma_deg} deg per angle)")
     if args.offset:
         print(f"offset = {result['offset_deg']:.4f} +- {result['offset_std_deg']:.4f} deg")
+    print("residuals (model - measured):")
     for name, r in zip(ANGLE_NAMES, result["residuals_deg"]):
         if r is not None:
-            print(f"  {name:12s} residual {r:+.4f} deg")
-    print(f"converged: {result['converged']} after {result['iterations']} iterations"
-          + (f" ({result['reason']})" if result["reason"] else ""))
+            print(f"  {name:12s} {r:+.4f} deg")
+    print(f"reduced chi^2 = {result['reduced_chi2']:.4g} (sum of (residual / sigma)^2 per "
+          "degree of freedom; ~1 when sigma is right)")
+    print(f"converged: True after {result['iterations']} iterations")
     if result["warning"]:
         print(f"warning: {result['warning']}")
-    return 0 if result["converged"] else 1
+    return 0
 
 
 def cmd_track(args) -> int:
     from jaxrod.analysis.magnet_track import trace_track
 
     scene, info = _magnet_scene_from_args(args)
+    path = _output_dir(args.out) if args.out is not None else None
     track = trace_track(scene, args.alpha0, args.tilt, n=args.n, t_max_deg=args.t_max)
     folds = [{"t_deg": f.t_deg, "magnet_polar_deg": f.magnet_polar_deg,
               "magnet_azimuth_deg": f.magnet_azimuth_deg, "rod_azimuth_deg": f.rod_azimuth_deg,
@@ -610,9 +816,7 @@ def cmd_track(args) -> int:
                   "t_max_deg": args.t_max, "status": track.status, "points": len(track.t_deg),
                   "max_out_of_plane": float(track.out_of_plane.max()), "folds": folds,
                   "converged": all(f["converged"] for f in folds)}
-    if args.out is not None:
-        path = Path(args.out)
-        path.mkdir(parents=True, exist_ok=True)
+    if path is not None:
         with open(path / "track.csv", "w") as fh:
             fh.write("t_deg,magnet_polar_deg,magnet_azimuth_deg,tip_x,tip_y,tip_z,stable\n")
             for i in range(len(track.t_deg)):
@@ -623,8 +827,8 @@ def cmd_track(args) -> int:
         (path / "track.json").write_text(json.dumps(out, indent=2) + "\n")
     if args.json:
         print(json.dumps(out))
-        return 0
-    print(f"G = {info['G']:.8g}, M = {info['M']:.8g}, D = {info['D']:.8g}, N = {args.n}: "
+        return 0 if out["converged"] else 1
+    print(_header(info) + f": "
           f"magnet from {args.alpha0} deg in the plane along a great circle tilted "
           f"{args.tilt} deg; {len(track.t_deg)} points ({track.status}); largest out-of-plane "
           f"chart value {out['max_out_of_plane']:.4f} rad")
@@ -634,10 +838,13 @@ def cmd_track(args) -> int:
               f"{f['rod_azimuth_deg']:.6f} deg{'' if f['converged'] else ' (NOT converged)'}")
     if not folds:
         print("no fold along the track")
-    return 0
+    if not out["converged"]:
+        _not_converged("track", "a fold refinement did not converge (see the fold lines)")
+    return 0 if out["converged"] else 1
 
 
 def cmd_reproduce(args) -> int:
+    from jaxrod.progress import progress_bar
     from jaxrod.reproduce import (
         format_permanent_magnet_report,
         format_uniform_field_report,
@@ -647,16 +854,35 @@ def cmd_reproduce(args) -> int:
         youngs_modulus_report,
     )
 
-    magnet = permanent_magnet_report()
+    out = _output_dir(args.out) if args.out is not None else None
+    sections = (("permanent_magnet", permanent_magnet_report),
+                ("uniform_field", uniform_field_report),
+                ("youngs_modulus_fit", youngs_modulus_report))
+    report = {}
+    bar = progress_bar(len(sections), "reproduce", "section", not args.quiet)
+    try:
+        for name, make in sections:
+            report[name] = make()
+            bar.update(1)
+    except KeyboardInterrupt:
+        bar.close()
+        report.get("permanent_magnet", {}).pop("_sweep_arrays", None)
+        if out is not None:
+            partial = report | {"complete": False, "reason": "interrupted (Ctrl-C) after "
+                                f"{len(report)} of {len(sections)} sections"}
+            (out / "report.json").write_text(json.dumps(partial, indent=2) + "\n")
+        print(f"jaxrod reproduce: interrupted after {len(report)} of {len(sections)} sections"
+              + (f"; wrote them to {out / 'report.json'} (marked incomplete)" if out else ""),
+              file=sys.stderr)
+        return 130
+    bar.close()
+    magnet = report["permanent_magnet"]
     sweep = magnet.pop("_sweep_arrays")
-    report = {"uniform_field": uniform_field_report(), "permanent_magnet": magnet,
-              "youngs_modulus_fit": youngs_modulus_report()}
+    report = {k: report[k] for k in ("uniform_field", "permanent_magnet", "youngs_modulus_fit")}
     text = (format_uniform_field_report(report["uniform_field"]) + "\n\n"
             + format_permanent_magnet_report(magnet) + "\n\n"
             + format_youngs_modulus_report(report["youngs_modulus_fit"]))
-    if args.out is not None:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
+    if out is not None:
         (out / "report.md").write_text(text + "\n")
         (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
         from jaxrod.plotting import hysteresis_figure, stability_diagram_figure
@@ -671,46 +897,67 @@ def cmd_reproduce(args) -> int:
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):
-    """Usage errors as one line on stderr, exit status 2."""
+    """Usage errors as one line on stderr, exit status 2; negative numbers in any notation
+    (``--E -1e9``, ``--alpha -2.5e1``) are values, not options."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-inf(inity)?$", re.IGNORECASE)
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _OneLineErrorParser(prog="jaxrod", description=__doc__.splitlines()[0])
+    parser = _OneLineErrorParser(
+        prog="jaxrod", description="Stability, folds and hysteresis of slender ferromagnetic "
+        "rods under gravity and magnetic fields. Each command prints a report, or one JSON "
+        "object with --json; bad input exits with status 2, a failed solve with status 1.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_OneLineErrorParser)
 
     g = sub.add_parser("greenhill", help="stability of the upright rod in a uniform field")
-    g.add_argument("--G", type=_float("G"), help="gravity group (> 0)")
-    g.add_argument("--A", type=_float("A"), help="anisotropy group; gives the verdict")
+    g.add_argument("--G", type=_float("G", "G"), help="gravity group, in (0, 1e7]")
+    g.add_argument("--A", type=_float("A", "A"), help="anisotropy group; gives the verdict")
     g.add_argument("--support", choices=["clamped", "pinned"], default=None)
     g.add_argument("--preset", choices=sorted(k for k in EXPERIMENTS if k != "permanent-magnet"),
                    help="one of the paper's nickel wires")
-    g.add_argument("--E", type=_float("E"), help="Young's modulus, Pa (default 200e9)")
-    g.add_argument("--diameter", type=_float("diameter"), help="wire diameter, m")
-    g.add_argument("--length", type=_float("length"), help="rod length, m")
-    g.add_argument("--field", choices=["on", "off"], default="on",
+    g.add_argument("--E", type=_float("E", "E"), help="Young's modulus, Pa (default 200e9)")
+    g.add_argument("--diameter", type=_float("diameter", "diameter"), help="wire diameter, m")
+    g.add_argument("--length", type=_float("length", "length"), help="rod length, m")
+    g.add_argument("--field", choices=["on", "off"], default=None,
                    help="uniform saturating field on (A from K_d) or off (A = 0)")
-    g.add_argument("--n", type=int, default=None, help="Chebyshev degree (default: from G)")
+    g.add_argument("--n", type=_degree("N"), default=None,
+                   help="Chebyshev degree, 4-256 (default: from G)")
     g.add_argument("--json", action="store_true", help="print one JSON object")
     g.set_defaults(func=cmd_greenhill)
 
     def magnet_inputs(p):
-        p.add_argument("--G", type=_float("G"), help="gravity group (> 0)")
-        p.add_argument("--M", type=_float("M"), help="magnet group (>= 0)")
-        p.add_argument("--D", type=_float("D"), help="track radius / rod length (> 1)")
+        p.add_argument("--G", type=_float("G", "G-magnet"), help="gravity group, in (0, 1e3]")
+        p.add_argument("--M", type=_float("M", "M"), help="magnet group, in [0, 1e3]")
+        p.add_argument("--D", type=_float("D", "D"), help="track radius / rod length, in "
+                       "(1, 1e3]")
         p.add_argument("--magnet-radius", type=_float("magnet radius"), default=None,
                        help="magnet radius / rod length (refuses D <= 1 + radius)")
         p.add_argument("--preset", choices=["permanent-magnet"],
                        help="the paper's nickel wire and NdFeB magnet")
-        p.add_argument("--E", type=_float("E"), help="Young's modulus, Pa (default 200e9)")
-        p.add_argument("--diameter", type=_float("diameter"), help="wire diameter, m")
-        p.add_argument("--length", type=_float("length"), help="rod length, m")
-        p.add_argument("--magnet-diameter", type=_float("magnet diameter"), help="m")
-        p.add_argument("--track-radius", type=_float("track radius"), help="m")
-        p.add_argument("--n", type=int, default=16, help="Chebyshev degree (default 16)")
+        p.add_argument("--E", type=_float("E", "E"), help="Young's modulus, Pa (default 200e9)")
+        p.add_argument("--diameter", type=_float("diameter", "diameter"),
+                       help="wire diameter, m")
+        p.add_argument("--length", type=_float("length", "length"), help="rod length, m")
+        p.add_argument("--rod-magnetisation", type=_float("rod-magnetisation",
+                                                          "rod-magnetisation"),
+                       help="the wire's saturation magnetisation, A/m (default nickel's 4.8e5)")
+        p.add_argument("--magnet-diameter", type=_float("magnet-diameter", "magnet-diameter"),
+                       help="m (default 15e-3)")
+        p.add_argument("--remanence", type=_float("remanence", "remanence"),
+                       help="the magnet's remanent magnetisation, A/m (default 8e5)")
+        p.add_argument("--track-radius", type=_float("track-radius", "track-radius"),
+                       help="m (default 0.1125)")
+        p.add_argument("--n", type=_degree("N-magnet"), default=None,
+                       help="Chebyshev degree, 4-64 (default 16)")
         p.add_argument("--json", action="store_true", help="print one JSON object")
+        p.set_defaults(n_fallback=16)
 
     f = sub.add_parser("folds", help="fold (switching) angles of the permanent-magnet scene")
     magnet_inputs(f)
@@ -719,7 +966,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     o = sub.add_parser("outofplane", help="out-of-plane stability of planar equilibria (3D)")
     magnet_inputs(o)
-    o.add_argument("--alpha", type=_float("alpha"), default=None,
+    o.add_argument("--alpha", type=_float("alpha", "alpha"), default=None,
                    help="magnet angle (deg): the equilibria at this angle; default: the branch")
     o.add_argument("--branch", action="store_true", help="the whole diagram (the default)")
     o.set_defaults(func=cmd_outofplane)
@@ -727,11 +974,11 @@ def build_parser() -> argparse.ArgumentParser:
     t = sub.add_parser("track", help="3D equilibria and folds along a magnet track that leaves "
                        "the plane")
     magnet_inputs(t)
-    t.add_argument("--alpha0", type=_float("alpha0"), default=20.0,
+    t.add_argument("--alpha0", type=_float("alpha0", "alpha0"), default=20.0,
                    help="start of the track in the plane, polar angle (deg, in (0, 90))")
-    t.add_argument("--tilt", type=_float("tilt"), default=90.0,
+    t.add_argument("--tilt", type=_float("tilt", "tilt"), default=90.0,
                    help="angle of the great circle to the meridian (deg; 0: planar track)")
-    t.add_argument("--t-max", type=_float("t-max"), default=60.0,
+    t.add_argument("--t-max", type=_float("t-max", "t-max"), default=60.0,
                    help="length of the track (deg of arc, in (0, 180])")
     t.add_argument("--out", default=None, help="directory for track.csv and track.json")
     t.set_defaults(func=cmd_track)
@@ -748,9 +995,12 @@ def build_parser() -> argparse.ArgumentParser:
     w = sub.add_parser("sweep", help="quasi-static hysteresis sweep (CSV, PNG, JSON)")
     magnet_inputs(w)
     w.add_argument("--out", required=True, help="output directory")
-    w.add_argument("--alpha-max", type=_float("alpha-max"), default=50.0,
-                   help="sweep from -alpha_max to +alpha_max and back (deg)")
-    w.add_argument("--step", type=_float("step"), default=0.25, help="magnet step (deg)")
+    w.add_argument("--alpha-max", type=_float("alpha-max", "alpha-max"), default=None,
+                   help="sweep from -alpha_max to +alpha_max and back (deg, in (0, 90]; "
+                   "default 50)")
+    w.add_argument("--step", type=_float("step", "step"), default=None,
+                   help="magnet step (deg, in (0, 5]; default 0.25)")
+    w.add_argument("--quiet", action="store_true", help="no progress bar")
     w.set_defaults(func=cmd_sweep)
 
     ft = sub.add_parser("fit", help="Young's modulus from measured switching angles",
@@ -758,16 +1008,17 @@ def build_parser() -> argparse.ArgumentParser:
                         "towards e1), in the order of the protocol: capture and release of the "
                         "clockwise sweep (alpha increasing), then capture and release of the "
                         "counter-clockwise sweep.")
-    ft.add_argument("--preset", choices=["permanent-magnet"], default="permanent-magnet")
+    ft.add_argument("--preset", choices=["permanent-magnet"], default=None)
     ft.add_argument("--angles", type=_float("angles"), nargs="+",
                     help="CW_CAPTURE CW_RELEASE CCW_CAPTURE CCW_RELEASE (deg)")
     for name in ("cw_capture", "cw_release", "ccw_capture", "ccw_release"):
         ft.add_argument("--" + name.replace("_", "-"), dest=name, type=_float(name),
                         default=None, help="one measured angle (deg); omit the others")
-    ft.add_argument("--sigma-deg", type=_float("sigma-deg"), default=1.0,
+    ft.add_argument("--sigma-deg", type=_float("sigma-deg", "sigma-deg"), default=None,
                     help="measurement error per angle (deg)")
     ft.add_argument("--offset", action="store_true", help="fit an offset of the angle scale")
-    ft.add_argument("--D", type=_float("D"), default=None, help="override track radius / L")
+    ft.add_argument("--D", type=_float("D", "D"), default=None,
+                    help="override track radius / L")
     ft.add_argument("--json", action="store_true")
     ft.set_defaults(func=cmd_fit)
 
@@ -804,6 +1055,7 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("reproduce", help="recompute the paper's tables and verdicts")
     r.add_argument("--out", default=None, help="directory for report.md, report.json, PNGs")
     r.add_argument("--json", action="store_true", help="print the report as JSON")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_reproduce)
     return parser
 
@@ -811,12 +1063,18 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    if getattr(args, "n_fallback", None) is not None:
+        args.n_default = args.n is None
+        args.n = args.n_fallback if args.n is None else args.n
     _enable_compilation_cache()
     try:
         return args.func(args)
     except ParameterError as err:
         print(f"jaxrod {args.command}: error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"jaxrod {args.command}: interrupted (Ctrl-C)", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -16,7 +16,8 @@ def test_greenhill_json_keys(capsys):
     assert main(["greenhill", "--G", "10", "--support", "clamped", "--A", "5", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert set(out) == {"G", "support", "beta0", "A_crit", "A2", "criticality", "G_crit", "A",
-                        "stable"}
+                        "stable", "inputs", "converged"}
+    assert out["inputs"]["N"] == {"value": 32, "unit": "", "source": "default: from G"}
     assert out["stable"] is True and out["support"] == "clamped"
     assert main(["greenhill", "--G", "10", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
@@ -143,7 +144,9 @@ def test_track_json_and_files(tmp_path, capsys):
     assert polar == pytest.approx(planar, abs=1e-9)
     lines = (tmp_path / "track.csv").read_text().splitlines()
     assert lines[0].startswith("t_deg,") and len(lines) == out["points"] + 1
-    assert main(["track", *MAGNET, "--alpha0", "95"]) == 2
+    with pytest.raises(SystemExit) as stop:
+        main(["track", *MAGNET, "--alpha0", "95"])
+    assert stop.value.code == 2
 
 
 PAPER_POINT = ["--G", "2.2", "--M", "0.0236", "--D", "1.2228260869565217"]

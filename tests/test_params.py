@@ -49,13 +49,13 @@ def test_stabilisation_length_and_twist_ratio():
 
 
 @pytest.mark.parametrize("make, name", [
-    (lambda: Rod(NICKEL, 50e-6, -0.1), "L (rod length)"),
-    (lambda: Rod(NICKEL, 0.0, 0.1), "wire diameter"),
-    (lambda: Rod(NICKEL, math.nan, 0.1), "wire diameter"),
+    (lambda: Rod(NICKEL, 50e-6, -0.1), "length (rod length)"),
+    (lambda: Rod(NICKEL, 0.0, 0.1), "diameter (wire diameter)"),
+    (lambda: Rod(NICKEL, math.nan, 0.1), "diameter (wire diameter)"),
     (lambda: NICKEL.with_youngs_modulus(-1.0), "E (Young's modulus)"),
-    (lambda: Material("x", 1e9, math.inf, 1.0, 1.0), "rho"),
+    (lambda: Material("x", 1e9, math.inf, 1.0, 1.0), "density"),
     (lambda: Material("x", 1e9, 1e3, 1.0, 1.0, poisson_ratio=0.7), "Poisson"),
-    (lambda: Magnet(-1e-3, 8e5, 0.1), "magnet diameter"),
+    (lambda: Magnet(-1e-3, 8e5, 0.1), "magnet-diameter"),
     (lambda: check_track_clearance(1.0), "D (track radius"),
     (lambda: check_track_clearance(1.05, 0.1), "tip cannot touch"),
     (lambda: check_groups(G=0.0), "G (gravity group)"),
@@ -71,4 +71,4 @@ def test_bad_input_names_the_parameter(make, name):
 def test_magnet_touching_rod_is_refused():
     rod = Rod(NICKEL, 50e-6, 0.1)
     with pytest.raises(ParameterError, match="tip cannot touch"):
-        rod.D(Magnet(diameter=0.05, saturation_magnetisation=8e5, track_radius=0.12))
+        rod.D(Magnet(diameter=0.05, remanence=8e5, track_radius=0.12))

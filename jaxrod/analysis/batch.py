@@ -32,6 +32,7 @@ import jax.numpy as jnp
 
 from jaxrod.analysis.reduction import normalised_mode
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
+from jaxrod.params import RANGES, ParameterError, check_degree
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers.folds import moore_spence_linearisation
 from jaxrod.solvers.newton import newton
@@ -197,15 +198,35 @@ def cast(disc: PlanarDiscretisation, dtype) -> PlanarDiscretisation:
     return jax.tree_util.tree_map(lambda a: a.astype(dtype), disc)
 
 
-@functools.partial(jax.jit, static_argnames=("n", "dtype"))
-def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64"):
-    """Fold pairs for arrays G, M, D (same shape K): (alphas (K, 2) radians, converged (K,),
-    max Moore-Spence iterations (K,)). Compiled once per (n, dtype, K).
+DTYPES = ("float64", "float32")
 
-    Matrix products run at full precision of ``dtype`` (GPUs otherwise multiply float32
-    matrices in TF32, which costs float32 three digits and Newton its convergence).
+
+def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64"):
+    """Fold pairs for arrays G, M, D (same shape K): (alphas (K, 2) radians, NaN where not
+    converged; converged (K,); max Moore-Spence iterations (K,)). Compiled once per
+    (n, dtype, K) (``fold_pairs_program``, which skips the checks).
+
+    The rows are validated first: a row outside ``jaxrod.params.RANGES`` (or NaN) raises
+    ParameterError naming it. Matrix products run at full precision of ``dtype`` (GPUs
+    otherwise multiply float32 matrices in TF32, which costs float32 three digits and
+    Newton its convergence).
     """
+    if dtype not in DTYPES:
+        raise ParameterError(f"dtype must be one of {DTYPES}, got {dtype!r}")
+    check_degree(n, "N-magnet")
+    G, M, D = (RANGES[k].check_rows(v) for k, v in (("G-magnet", G), ("M", M), ("D", D)))
+    if not G.ndim == 1 or G.shape != M.shape or G.shape != D.shape:
+        raise ParameterError(f"G, M, D must be 1-d arrays of one length, got shapes "
+                             f"{G.shape}, {M.shape}, {D.shape}")
+    return fold_pairs_program(G, M, D, n=n, dtype=dtype)
+
+
+@functools.partial(jax.jit, static_argnames=("n", "dtype"))
+def fold_pairs_program(G, M, D, n: int = 12, dtype: str = "float64"):
+    """``fold_pairs`` without the input checks: the compiled program itself (``.lower``)."""
     disc = cast(planar_discretisation(n, "clamped"), dtype)
     G, M, D = (jnp.asarray(v, dtype) for v in (G, M, D))
     with jax.default_matmul_precision("highest"):
-        return jax.vmap(lambda g, m, d: fold_pair_one(g, m, d, disc))(G, M, D)
+        alphas, converged, iterations = jax.vmap(
+            lambda g, m, d: fold_pair_one(g, m, d, disc))(G, M, D)
+    return jnp.where(converged[:, None], alphas, jnp.nan), converged, iterations

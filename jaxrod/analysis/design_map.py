@@ -53,6 +53,7 @@ from jaxrod.analysis.fold_curves import DesignPoint, groups_of
 from jaxrod.analysis.magnet import default_options, locate_folds
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import UNITS, ParameterError
+from jaxrod.progress import progress_bar
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers.continuation import continuation_run
 from jaxrod.solvers.folds import moore_spence_solve
@@ -395,7 +396,7 @@ def run_map(spec: MapSpec, out: Path, progress: bool = True, devices=None) -> di
     p, count = jax.process_index(), jax.process_count()
     mine = [(k, ij) for k, ij in enumerate(spec.chunks()) if k % count == p]
     todo = [ij for _, ij in mine if not _chunk_done(out, f"{ij[0]}.{ij[1]}")]
-    bar = _progress(len(mine), len(mine) - len(todo), progress)
+    bar = progress_bar(len(mine), "map", "chunk", progress, len(mine) - len(todo))
     c = spec.chunk
     try:
         for iy, ix in todo:
@@ -410,19 +411,3 @@ def run_map(spec: MapSpec, out: Path, progress: bool = True, devices=None) -> di
             "computed": len(todo), "resumed": len(mine) - len(todo)}
 
 
-class _NoBar:
-    def update(self, k):
-        pass
-
-    def close(self):
-        pass
-
-
-def _progress(total: int, done: int, enabled: bool):
-    import sys
-
-    if not enabled or not sys.stderr.isatty():
-        return _NoBar()
-    from tqdm import tqdm
-
-    return tqdm(total=total, initial=done, unit="chunk", desc="map", file=sys.stderr)

@@ -49,7 +49,14 @@ import optax
 from jaxrod.analysis.batch import fold_pair_states
 from jaxrod.analysis.magnet import fold_angles
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
-from jaxrod.params import NDFEB_MAGNET, ParameterError, preset
+from jaxrod.params import (
+    NDFEB_MAGNET,
+    RANGES,
+    ParameterError,
+    check,
+    check_track_clearance,
+    preset,
+)
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers.folds import differentiable_fold
 from jaxrod.stored import StoredProgram
@@ -69,6 +76,16 @@ class FitSetup:
     M_ref: float
     D: float
     E_ref: float
+
+    def __post_init__(self):
+        # concrete values are checked; traced or placeholder leaves (jax rebuilds the
+        # dataclass inside programs) are not
+        values = (self.G_ref, self.M_ref, self.D, self.E_ref)
+        if all(isinstance(v, (int, float, np.integer, np.floating)) for v in values):
+            check("G-magnet", self.G_ref)
+            check("M", self.M_ref)
+            check_track_clearance(self.D)
+            check("E", self.E_ref)
 
 
 def setup_from_preset(name: str = "permanent-magnet") -> FitSetup:
@@ -219,17 +236,26 @@ _fit_batch_jit = jax.jit(jax.vmap(_fit_core, in_axes=(0, 0, None, None, None, No
 
 
 def _parse(measured, sigma_deg):
-    measured = np.asarray(measured, dtype=float).reshape(-1)
+    try:
+        measured = np.asarray(measured, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ParameterError(f"angles: give 4 numbers ({', '.join(ANGLE_NAMES)}), got "
+                             f"{measured!r:.60}") from None
     if measured.size != 4:
         raise ParameterError(f"angles: give 4 values ({', '.join(ANGLE_NAMES)}), with nan for "
                              f"a missing one; got {measured.size}")
-    mask = np.isfinite(measured)
+    if np.any(np.isinf(measured)):
+        raise ParameterError(f"angles: must be finite, or nan for one not measured; got "
+                             f"{measured.tolist()}")
+    mask = ~np.isnan(measured)
     if mask.sum() == 0:
         raise ParameterError("angles: at least one measured angle is needed")
-    if not (math.isfinite(sigma_deg) and sigma_deg > 0):
-        raise ParameterError(f"sigma-deg must be a finite number > 0, got {sigma_deg!r}")
-    if np.any(np.abs(measured[mask]) >= 90.0):
-        raise ParameterError("angles: switching angles must lie in (-90, 90) degrees")
+    check("sigma-deg", sigma_deg)
+    angle = RANGES["angle"]
+    bad = [name for name, v, m in zip(ANGLE_NAMES, measured, mask) if m and not angle.contains(v)]
+    if bad:
+        raise ParameterError(f"angles: switching angles must lie in {angle.interval()}; "
+                             f"{', '.join(bad)} do not")
     return measured, mask
 
 
@@ -243,6 +269,7 @@ def fit_youngs_modulus(measured, sigma_deg: float = 1.0, fit_offset: bool = Fals
     measured, mask = _parse(measured, sigma_deg)
     if fit_offset and mask.sum() < 2:
         raise ParameterError("angles: fitting the offset needs at least two angles")
+    check("E", E0)
     setup = setup or setup_from_preset()
     out = _fit_jit(
         jnp.asarray(np.nan_to_num(measured)), jnp.asarray(mask), float(sigma_deg),

@@ -91,8 +91,8 @@ class DesignPoint:
     def from_physical(cls, rod: Rod, magnet: Magnet) -> DesignPoint:
         m = rod.material
         point = cls("physical", (m.youngs_modulus, m.density, rod.gravity, rod.diameter,
-                                 rod.length, m.remanent_magnetisation,
-                                 magnet.saturation_magnetisation, magnet.diameter,
+                                 rod.length, m.saturation_magnetisation,
+                                 magnet.remanence, magnet.diameter,
                                  magnet.track_radius))
         point.check()
         return point

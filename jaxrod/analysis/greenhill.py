@@ -40,7 +40,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.planar import PlanarDiscretisation, check_support, planar_discretisation
-from jaxrod.params import ParameterError, Rod, check_finite, check_positive
+from jaxrod.params import ParameterError, Rod, check, check_degree
 from jaxrod.scenes.uniform import UniformField
 from jaxrod.solvers.newton import newton
 
@@ -193,11 +193,11 @@ def greenhill(G: float, support: str = "clamped", A: float | None = None,
       A: anisotropy group (optional); the rod is stable iff A + beta0 > 0.
       n: Chebyshev degree (default ``default_degree(G)``).
     """
-    G = check_positive("G (gravity group)", G)
+    G = check("G", G)
     check_support(support)
     if A is not None:
-        A = check_finite("A (anisotropy group)", A)
-    n = default_degree(G) if n is None else n
+        A = check("A", A)
+    n = default_degree(G) if n is None else check_degree(n)
     disc = planar_discretisation(n, support)
     beta0, a2, _ = (float(v) for v in _pitchfork_jit(G, disc))
     if n not in _G_CRIT_CACHE:

@@ -23,7 +23,8 @@ import numpy as np
 
 from jaxrod.analysis.branch import Branch, branch_from_runs
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
-from jaxrod.params import ParameterError, check_groups, check_track_clearance
+from jaxrod.params import RANGES, check, check_degree, check_track_clearance
+from jaxrod.progress import Interrupted
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle, tip_position
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.descent import descend
@@ -45,7 +46,8 @@ def alpha_energy(theta, alpha, args):
 
 def make_scene(G: float, M: float, D: float, magnet_radius: float | None = None) -> DipoleMagnet:
     """Validated scene. ``magnet_radius`` (a/L) refuses magnets the rod could touch."""
-    check_groups(G=G, M=M)
+    check("G-magnet", G)
+    check("M", M)
     check_track_clearance(D, 0.0 if magnet_radius is None else magnet_radius)
     return DipoleMagnet(float(G), float(M), float(D), 0.0)
 
@@ -108,7 +110,7 @@ def trace_diagram(scene: DipoleMagnet, n: int = DEFAULT_N,
 
     One compiled program runs both directions from (theta, alpha) = (0, 0) (vmapped).
     """
-    disc = planar_discretisation(n, "clamped")
+    disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     options = options or default_options()
     start, runs, observed = _diagram(scene, disc, options._replace(max_points=0),
                                      options.max_points)
@@ -206,26 +208,44 @@ def _fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
 FOLD_PAIR_CAPACITY = 128
 
 
-@functools.partial(jax.jit, static_argnames=("n", "tol"))
 def fold_angles(G, M, D, n: int = 12, tol: float = 1e-13):
     """(alpha_lower, alpha_upper) in radians and a converged flag, differentiable in G, M, D.
 
     Pure JAX (jit, vmap and grad compose): the fold guesses come from a one-sided
     continuation (no gradient flows through it) and each fold is the implicitly
     differentiated solution of its Moore-Spence system (``differentiable_fold``). Assumes
-    the S-shaped diagram; ``converged`` is False when two folds are not found in (0, 90]
-    degrees or a Moore-Spence solve fails. Inputs are not validated here (they may be
-    tracers): validate user input with ``make_scene`` first. Compiled once per (n, tol):
-    later calls with new values, and ``jax.grad`` of it, reuse the program.
+    the S-shaped diagram; ``converged`` is False, and the angles NaN, when two folds are not
+    found in (0, 90] degrees, a Moore-Spence solve fails or (G, M, D) lie outside their
+    valid ranges (``jaxrod.params.RANGES``). Concrete inputs are validated (ParameterError);
+    traced ones are checked inside the program. Compiled once per (n, tol): later calls
+    with new values, and ``jax.grad`` of it, reuse the program.
     """
+    if not any(isinstance(v, jax.core.Tracer) for v in (G, M, D)):
+        check("G-magnet", G)
+        check("M", M)
+        check_track_clearance(D)
+        check_degree(n, "N-magnet")
+    return _fold_angles_program(G, M, D, n=n, tol=tol)
+
+
+def valid_groups(G, M, D):
+    """Inside a program: whether (G, M, D) lie in their valid ranges (``RANGES``)."""
+    return (RANGES["G-magnet"].contains(G) & RANGES["M"].contains(M)
+            & RANGES["D"].contains(D))
+
+
+@functools.partial(jax.jit, static_argnames=("n", "tol"))
+def _fold_angles_program(G, M, D, n: int, tol: float):
+    valid = valid_groups(G, M, D)
+    G, M, D = (jnp.where(valid, v, x) for v, x in zip((G, M, D), (1.0, 0.0, 2.0)))
     scene = DipoleMagnet(G, M, D, 0.0)
     disc = planar_discretisation(n, "clamped")
     x0, lam0, phi0, found = _fold_guesses(jax.lax.stop_gradient(scene), disc)
     solve = lambda x, l, p: differentiable_fold(ALPHA_MODEL, x, l, p, (scene, disc), tol)
     z, stats = jax.vmap(solve)(x0, lam0, phi0)
     alphas = jnp.sort(z[:, -1])
-    converged = found & jnp.all(stats[:, 0] == 1.0) & (alphas[1] - alphas[0] > 1e-9)
-    return alphas, converged
+    converged = valid & found & jnp.all(stats[:, 0] == 1.0) & (alphas[1] - alphas[0] > 1e-9)
+    return jnp.where(converged, alphas, jnp.nan), converged
 
 
 
@@ -304,7 +324,7 @@ def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None 
     branch turns back; capture). Folds at alpha < 0 are their mirror images. With no
     fold (no bistability) the list is empty.
     """
-    disc = planar_discretisation(n, "clamped")
+    disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     given = branch is not None
     branch = branch or trace_diagram(scene, n)
     report = _folds_on(scene, disc, branch, n, tol)
@@ -374,32 +394,64 @@ def _sweep(theta0, alphas, scene, disc):
     return jax.lax.scan(lambda c, a: _follow_step(c, a, scene, disc), theta0, alphas)
 
 
+#: Magnet positions per compiled chunk of a sweep (progress and Ctrl-C act between chunks).
+SWEEP_CHUNK = 256
+
+
 def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: float = 50.0,
-                     step_deg: float = 0.25) -> dict:
+                     step_deg: float = 0.25, progress=None) -> dict:
     """The experiment's protocol: alpha from -alpha_max to +alpha_max (clockwise), then back.
 
     At each magnet position the previous state is continued by Newton; when it no longer
     exists as a nearby stable equilibrium (a fold was passed) the rod snaps: the energy is
     descended from the last state to the other stable branch. Returns both sweeps, the snap
     angles on the grid (the first grid angle past a fold) and whether every step converged.
+
+    The positions run in compiled chunks of ``SWEEP_CHUNK`` (one program for every chunk);
+    ``progress(done, total)`` is called after each. Ctrl-C raises
+    ``jaxrod.progress.Interrupted`` whose ``partial`` is this dict for the positions done
+    (``complete`` False, ``reason`` saying where).
     """
-    if not (0.0 < step_deg <= 5.0):
-        raise ParameterError(f"step_deg must lie in (0, 5], got {step_deg!r}")
-    disc = planar_discretisation(n, "clamped")
+    alpha_max_deg = check("alpha-max", alpha_max_deg)
+    step_deg = check("step", step_deg)
+    disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     up = np.arange(-alpha_max_deg, alpha_max_deg + 0.5 * step_deg, step_deg)
     alphas = np.radians(np.concatenate([up, up[::-1][1:]]))
     start = _relax(jnp.zeros(disc.size), alphas[0], scene, disc)
-    _, (thetas, snapped, ok) = _sweep(start.x, jnp.asarray(alphas), scene, disc)
-    q, tip, _ = _observables(thetas, jnp.asarray(alphas), scene, disc)
-    snapped = np.asarray(snapped)
-    direction = np.where(np.arange(alphas.size) < up.size, "cw", "ccw")
+    theta, parts = start.x, []
+    try:
+        for i in range(0, alphas.size, SWEEP_CHUNK):
+            chunk = alphas[i:i + SWEEP_CHUNK]
+            padded = np.pad(chunk, (0, SWEEP_CHUNK - chunk.size), mode="edge")
+            theta_end, (thetas, snapped, ok) = _sweep(theta, jnp.asarray(padded), scene, disc)
+            thetas, snapped, ok = (np.asarray(v)[:chunk.size] for v in (thetas, snapped, ok))
+            theta = theta_end
+            parts.append((thetas, snapped, ok))
+            if progress is not None:
+                progress(min(i + SWEEP_CHUNK, alphas.size), alphas.size)
+    except KeyboardInterrupt:
+        done = sum(p[0].shape[0] for p in parts)
+        raise Interrupted(_sweep_result(alphas[:done], up.size, parts, start, scene, disc,
+                                        f"interrupted (Ctrl-C) after {done} of {alphas.size} "
+                                        "magnet positions"), "sweep") from None
+    return _sweep_result(alphas, up.size, parts, start, scene, disc, None)
+
+
+def _sweep_result(alphas, n_up, parts, start, scene, disc, reason) -> dict:
+    if parts:
+        thetas, snapped, ok = (np.concatenate(v) for v in zip(*parts))
+        q, tip, _ = _observables(jnp.asarray(thetas), jnp.asarray(alphas), scene, disc)
+    else:
+        snapped, ok, q, tip = (np.zeros(0, bool), np.zeros(0, bool), np.zeros(0), np.zeros(0))
+    direction = np.where(np.arange(alphas.size) < n_up, "cw", "ccw")
     snaps = [{"direction": str(direction[i]), "alpha_deg": float(np.degrees(alphas[i])),
               "tip_before_deg": float(np.degrees(tip[i - 1])),
               "tip_after_deg": float(np.degrees(tip[i]))}
              for i in np.nonzero(snapped)[0]]
     return {"alpha_deg": np.degrees(alphas), "tip_deg": np.degrees(np.asarray(tip)),
             "q": np.asarray(q), "snapped": snapped, "direction": direction, "snaps": snaps,
-            "converged": bool(np.all(np.asarray(ok)) and bool(start.converged))}
+            "converged": bool(np.all(ok) and bool(start.converged)),
+            "complete": reason is None, "reason": reason}
 
 
 def square_root_law(scene: DipoleMagnet, fold: Fold, n: int = DEFAULT_N,

@@ -33,7 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.director import DirectorDiscretisation, director_discretisation
-from jaxrod.params import check_finite, check_value
+from jaxrod.params import check, check_degree
 from jaxrod.scenes.dipole import DipoleMagnet
 from jaxrod.scenes.three_d import DipoleMagnet3D, magnet_position
 from jaxrod.solvers.continuation import STATUS_MESSAGES, ContinuationOptions, continuation_run
@@ -56,10 +56,8 @@ class GreatCircleTrack:
 def tilted_track(alpha0_deg: float, tilt_deg: float) -> GreatCircleTrack:
     """The great circle through the in-plane position at polar angle alpha0, leaving the
     plane at angle ``tilt`` to the meridian (0: the planar track; 90: heading along e2)."""
-    check_value("alpha0_deg (start of the track)", alpha0_deg, lambda x: 0.0 < x < 90.0,
-           "in (0, 90) degrees")
-    check_finite("tilt_deg (angle of the track to the meridian)", tilt_deg)
-    a, b = math.radians(alpha0_deg), math.radians(tilt_deg)
+    a = math.radians(check("alpha0", alpha0_deg))
+    b = math.radians(check("tilt", tilt_deg))
     meridian = jnp.array([math.cos(a), 0.0, -math.sin(a)])
     return GreatCircleTrack(magnet_position(a), math.cos(b) * meridian
                             + math.sin(b) * jnp.array([0.0, 1.0, 0.0]))
@@ -166,10 +164,9 @@ def trace_track(scene: DipoleMagnet, alpha0_deg: float = 20.0, tilt_deg: float =
     """Follow the rod in 3D as the magnet moves along ``tilted_track(alpha0, tilt)`` from
     t = 0 (the local minimum reached from the straight rod) to t_max, through folds; each
     fold is refined."""
-    check_value("t_max_deg (end of the track)", t_max_deg, lambda x: 0.0 < x <= 180.0,
-           "in (0, 180] degrees")
+    check("t-max", t_max_deg)
     track = tilted_track(alpha0_deg, tilt_deg)
-    disc = director_discretisation(n)
+    disc = director_discretisation(check_degree(n, "N-magnet"))
     options = ContinuationOptions(ds=0.02, ds_min=1e-8, ds_max=0.05, lam_min=-1e-9,
                                   lam_max=math.radians(t_max_deg), tol=1e-12, max_points=0)
     start, raw, tips = _trace(scene, track, disc, options, max_points)

@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod import spectral
-from jaxrod.params import ParameterError
+from jaxrod.params import ParameterError, check_degree
 
 SUPPORTS = ("clamped", "pinned")
 
@@ -129,8 +129,7 @@ def planar_discretisation(n: int, support: str = "clamped",
 
     ``quad_degree`` (default 2n + 2) is the degree of the fine Clenshaw-Curtis grid.
     """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 4:
-        raise ParameterError(f"N (Chebyshev degree) must be an integer >= 4, got {n!r}")
+    n = check_degree(n)
     check_support(support)
     m = 2 * int(n) + 2 if quad_degree is None else int(quad_degree)
     arrays = _planar_arrays(int(n), support, m)
