@@ -70,6 +70,7 @@ def _float(name: str, valid: str | None = None):
                 raise argparse.ArgumentTypeError(str(err)) from None
         return value
 
+    parse.valid = valid  # the range an option's value is checked against (None: any number)
     return parse
 
 
@@ -87,6 +88,7 @@ def _degree(valid: str):
         except ParameterError as err:
             raise argparse.ArgumentTypeError(str(err)) from None
 
+    parse.valid = valid
     return parse
 
 
@@ -1077,5 +1079,16 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+def run() -> None:
+    """The ``jaxrod`` command. After Ctrl-C the process ends at once (os._exit): compiler
+    threads interrupted midway must not run the interpreter's teardown."""
+    code = main()
+    if code == 130:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

@@ -43,3 +43,14 @@ def test_fold_pairs_float32_loses_about_four_digits():
     assert np.asarray(c32).all() and np.asarray(c64).all()
     err = np.degrees(np.abs(np.asarray(a32, float) - np.asarray(a64)))
     assert 1e-7 < err.max() < 1e-2
+
+
+def test_a_set_without_folds_is_nan_not_a_number():
+    """M = 0.001 is far past the cusp (no hysteresis; ``locate_folds`` finds no fold): the
+    row is NaN and not converged, never a plausible angle; its neighbour is unaffected."""
+    assert magnet.locate_folds(magnet.make_scene(2.2, 0.001, 1.2228)).folds == []
+    alphas, converged, _ = fold_pairs([2.2, 2.2, 2.2], [0.001, 0.0236, 0.0236],
+                                      [1.2228, 1.2228, 1.2228])
+    alphas, converged = np.asarray(alphas), np.asarray(converged)
+    assert not converged[0] and np.all(np.isnan(alphas[0]))
+    assert converged[1] and np.all(np.isfinite(alphas[1]))

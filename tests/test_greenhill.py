@@ -42,10 +42,12 @@ def test_beta0_vanishes_at_g_crit_and_changes_sign():
 
 @pytest.mark.parametrize("support", ["clamped", "pinned"])
 def test_pitchfork_coefficient_matches_airy_quadrature(support):
-    for G in (0.5, 9.0, 10.5, 100.0):
+    # G = 10 sits next to the clamped A2's zero (G = 9.9998, A2 = 4e-5 there): a relative
+    # error is meaningless there, so the error is measured against max(|A2|, 1)
+    for G in (0.5, 9.0, 10.0, 10.5, 100.0):
         ref = airy.pitchfork_coefficient(G, support)
         res = gh.greenhill(G, support)
-        assert abs(res.A2 - ref) <= 1e-9 * abs(ref), (G, res.A2, ref)
+        assert abs(res.A2 - ref) <= 1e-9 * max(abs(ref), 1.0), (G, res.A2, ref)
         assert res.criticality == ("subcritical" if ref > 0 else "supercritical")
 
 

@@ -49,7 +49,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.analysis.batch import fold_pair_states
-from jaxrod.analysis.fold_curves import DesignPoint, groups_of
+from jaxrod.analysis.fold_curves import DesignPoint, groups_of, range_of
 from jaxrod.analysis.magnet import default_options, locate_folds
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import UNITS, ParameterError
@@ -119,18 +119,19 @@ def _grid_values(point: DesignPoint, x: Axis, y: Axis) -> np.ndarray:
 
 
 def _validity(point: DesignPoint, values: np.ndarray) -> np.ndarray:
-    """True where every input is positive (M, magnetisations non-negative) and the magnet
-    clears the rod (D > 1 + a / L)."""
+    """True where every input and the groups they make lie in their ranges
+    (``jaxrod.params.RANGES``) and the magnet clears the rod (D > 1 + a / L)."""
     names = point.names
     ok = np.ones(values.shape[:-1], bool)
-    for i, name in enumerate(names):
-        v = values[..., i]
-        ok &= np.isfinite(v) & ((v >= 0) if name in ("M", "rod-magnetisation", "remanence")
-                                else (v > 0))
-    G, M, D = groups_of(point.kind, np.moveaxis(values, -1, 0))
-    radius = (point.magnet_radius if point.kind == "groups"
-              else 0.5 * values[..., 7] / values[..., 4])
-    return ok & (D > 1.0 + radius)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for i, name in enumerate(names):
+            v = values[..., i]
+            ok &= np.isfinite(v) & range_of(name).contains(v)
+        G, M, D = groups_of(point.kind, np.moveaxis(values, -1, 0))
+        radius = (point.magnet_radius if point.kind == "groups"
+                  else 0.5 * values[..., 7] / values[..., 4])
+        return (ok & range_of("G").contains(G) & range_of("M").contains(M)
+                & range_of("D").contains(D) & (D > 1.0 + radius))
 
 
 # --- tier 1 and 2: batched solves over a chunk ----------------------------------------------

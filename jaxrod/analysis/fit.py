@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 from typing import Any, NamedTuple
 
 import jax
@@ -57,6 +56,7 @@ from jaxrod.params import (
     check_track_clearance,
     preset,
 )
+from jaxrod.progress import Interrupted, progress_bar
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers.folds import differentiable_fold
 from jaxrod.stored import StoredProgram
@@ -286,9 +286,15 @@ def fit_batch(measured, sigma_deg: float = 1.0, fit_offset: bool = False,
     GPU); ``"loop"`` runs the compiled single fit row by row, which is faster on a CPU, where
     every nested while loop of a vmapped batch runs until its slowest element is done
     (benchmarks/fit_performance.py). ``"auto"`` picks vmap on a GPU and loop otherwise.
-    ``progress`` prints a progress line per 5% on stderr (loop only).
+    ``progress`` shows a progress bar on a terminal (loop only); Ctrl-C raises
+    ``jaxrod.progress.Interrupted`` with the fits done so far as ``partial``.
     """
-    rows = [_parse(m, sigma_deg) for m in np.atleast_2d(measured)]
+    rows = []
+    for i, m in enumerate(np.atleast_2d(measured)):
+        try:
+            rows.append(_parse(m, sigma_deg))
+        except ParameterError as err:
+            raise ParameterError(f"row {i}: {err}") from None
     setup = setup or setup_from_preset()
     if method == "auto":
         method = "vmap" if jax.default_backend() == "gpu" else "loop"
@@ -296,10 +302,15 @@ def fit_batch(measured, sigma_deg: float = 1.0, fit_offset: bool = False,
         raise ParameterError(f"method must be 'auto', 'vmap' or 'loop', got {method!r}")
     if method == "loop":
         out = []
-        for i, (m, _) in enumerate(rows):
-            out.append(fit_youngs_modulus(m, sigma_deg, fit_offset, setup, E0))
-            if progress and (i + 1) % max(1, len(rows) // 20) == 0:
-                print(f"fit_batch: {i + 1}/{len(rows)}", file=sys.stderr, flush=True)
+        bar = progress_bar(len(rows), "fits", "fit", progress)
+        try:
+            for m, _ in rows:
+                out.append(fit_youngs_modulus(m, sigma_deg, fit_offset, setup, E0))
+                bar.update(1)
+        except KeyboardInterrupt:
+            raise Interrupted(out, f"after {len(out)} of {len(rows)} fits") from None
+        finally:
+            bar.close()
         return out
     m = jnp.asarray(np.nan_to_num(np.stack([r[0] for r in rows])))
     mask = jnp.asarray(np.stack([r[1] for r in rows]))

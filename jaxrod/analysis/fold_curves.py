@@ -36,6 +36,7 @@ from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import (
     GROUP_NAMES,
     PHYSICAL_NAMES,
+    RANGES,
     Magnet,
     ParameterError,
     Rod,
@@ -127,12 +128,17 @@ class DesignPoint:
         return dataclasses.replace(self, values=tuple(values))
 
     def check(self) -> None:
-        """Validate the point (ParameterError naming the offending input)."""
+        """Validate the point against ``jaxrod.params.RANGES``, its inputs and the groups
+        they make (ParameterError naming the offending input)."""
         for name, v in zip(self.names, self.values, strict=True):
-            if not (math.isfinite(v) and (v > 0 or (name in ("M", "rod-magnetisation",
-                                                               "remanence") and v >= 0))):
-                raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
+            range_of(name).check(v)
         G, M, D = self.groups()
+        if self.kind == "physical":
+            for name, v in (("G", G), ("M", M)):
+                if not range_of(name).contains(v):
+                    r = range_of(name)
+                    raise ParameterError(f"{r.label} = {v:.4g} from the physical inputs is "
+                                         f"outside {r.interval()} ({r.why})")
         check_track_clearance(D, self.radius())
 
     def as_dict(self) -> dict:
@@ -287,9 +293,20 @@ CURVE_OPTIONS = FoldCurveOptions(ds=0.01, ds_min=1e-9, ds_max=0.02, lam_min=-mat
 CURVE_CAPACITY = 512
 
 
+def range_of(name: str):
+    """The ``jaxrod.params.RANGES`` entry of a design input (a group or a physical input)."""
+    return RANGES["G-magnet" if name == "G" else name]
+
+
 def valid_range(point: DesignPoint, name: str) -> tuple[float, float]:
     """The open interval of the input ``name`` (others fixed) where the point is valid:
     positive inputs, and a magnet that clears the rod (D > 1 + a / L)."""
+    lo, hi = _clearance_range(point, name)
+    r = range_of(name)
+    return max(lo, r.low), min(hi, r.high)
+
+
+def _clearance_range(point: DesignPoint, name: str) -> tuple[float, float]:
     point.index(name)  # validates the name
     v = point.values
     if point.kind == "groups":
