@@ -24,6 +24,7 @@ from jaxrod.params import (
     NICKEL,
     PHYSICAL_NAMES,
     RANGES,
+    UNITS,
     Magnet,
     ParameterError,
     Rod,
@@ -744,8 +745,51 @@ def cmd_sweep(args) -> int:
     return 0 if sweep["converged"] else 1
 
 
-def cmd_fit(args) -> int:
-    from jaxrod.analysis.fit import ANGLE_NAMES, FitSetup, fit_youngs_modulus, setup_from_preset
+def _names(text: str, what: str) -> tuple[str, ...]:
+    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    if not names:
+        raise ParameterError(f"{what}: give a comma-separated list of names, got {text!r}")
+    return names
+
+
+MU0_TESLA = 4e-7 * math.pi
+
+
+def _quantity(name: str, text: str, what: str) -> float:
+    """A number in the parameter's SI units; magnetisations may be given in tesla (1.2T)."""
+    scale = 1.0
+    if text.strip().upper().endswith("T") and name in ("remanence", "rod-magnetisation"):
+        text, scale = text.strip()[:-1], 1.0 / MU0_TESLA
+    try:
+        value = float(text)
+    except ValueError:
+        raise ParameterError(f"{what} {name}: {text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise ParameterError(f"{what} {name}: must be finite, got {text!r}")
+    return value * scale
+
+
+def _pairs(items, what: str, allowed) -> dict:
+    """NAME=A:B options (priors, bounds) as name -> (a, b)."""
+    out = {}
+    for item in items:
+        name, sep, rest = item.partition("=")
+        name = name.strip()
+        a, sep2, b = rest.partition(":")
+        if not sep or not sep2:
+            raise ParameterError(f"{what}: write NAME={'MEAN:SD' if what == 'prior' else 'LO:HI'}"
+                                 f", got {item!r}")
+        if name not in allowed:
+            raise ParameterError(f"{what}: unknown parameter {name!r}; choose from "
+                                 f"{', '.join(allowed)}")
+        if name in out:
+            raise ParameterError(f"{what}: {name} given twice")
+        out[name] = (_quantity(name, a, what), _quantity(name, b, what))
+    return out
+
+
+def _measured_from_args(args) -> list:
+    from jaxrod.analysis.fit import ANGLE_NAMES
 
     named = [getattr(args, name) for name in ANGLE_NAMES]
     if args.angles is not None:
@@ -761,47 +805,175 @@ def cmd_fit(args) -> int:
     if len(measured) != 4:
         raise ParameterError(f"angles: --angles takes 4 values ({', '.join(ANGLE_NAMES)}), "
                              f"got {len(measured)}")
-    args.preset_given, args.sigma_given = args.preset is not None, args.sigma_deg is not None
-    args.preset = args.preset or "permanent-magnet"
+    return measured
+
+
+def _physical_point(args):
+    """(DesignPoint, inputs used) of the wire and magnet: the user's, the rest the paper's."""
+    from jaxrod.analysis.fold_curves import DesignPoint
+
+    physical = _magnet_physical_from_args(args)
+    if physical is None:
+        args_empty = argparse.Namespace(**{k: None for k in _MAGNET_PHYSICAL + (
+            "G", "M", "D", "magnet_radius")})
+        args_empty.preset = "permanent-magnet"
+        physical = _magnet_physical_from_args(args_empty)
+        for entry in physical[2].values():
+            entry["source"] = entry["source"].replace("given", "preset permanent-magnet")
+    rod, magnet, inputs = physical
+    if args.D_ratio is not None:
+        magnet = Magnet(magnet.diameter, magnet.remanence, args.D_ratio * rod.length)
+        inputs["track-radius"] = _entry(magnet.track_radius, "m", "from --D")
+    return DesignPoint.from_physical(rod, magnet), inputs
+
+
+def cmd_fit(args) -> int:
+    from jaxrod.analysis.fit import ANGLE_NAMES, FREE_NAMES, OFFSET, Prior, fit, profile
+
+    measured = _measured_from_args(args)
+    args.sigma_given = args.sigma_deg is not None
     args.sigma_deg = 1.0 if args.sigma_deg is None else args.sigma_deg
-    setup = setup_from_preset(args.preset)
-    if args.D is not None:
-        setup = FitSetup(setup.G_ref, setup.M_ref, args.D, setup.E_ref)
-    result = fit_youngs_modulus(measured, args.sigma_deg, args.offset, setup)
-    inputs = {"preset": _entry(args.preset, "", "given" if args.preset_given else "default"),
-              "G_ref": _entry(setup.G_ref, "", f"preset {args.preset}"),
-              "M_ref": _entry(setup.M_ref, "", f"preset {args.preset}"),
-              "D": _entry(setup.D, "", _source(args, "D", f"preset {args.preset}")),
-              "E_ref": _entry(setup.E_ref, "Pa", f"preset {args.preset}"),
-              "sigma-deg": _entry(args.sigma_deg, "deg", "given" if args.sigma_given
-                                  else "default"),
-              "offset": _entry("fitted" if args.offset else "fixed at 0", "", "given"
-                               if args.offset else "default")}
+    if args.free is not None:
+        free = _names(args.free, "free")
+        if args.offset and OFFSET not in free:
+            free += (OFFSET,)
+    else:
+        free = ("E", OFFSET) if args.offset else ("E",)
+    priors = {k: Prior(*v) for k, v in _pairs(args.prior, "prior", FREE_NAMES).items()}
+    bounds = _pairs(args.bounds, "bounds", FREE_NAMES)
+    out_dir = _output_dir(args.out) if args.out else None
+    if args.profile and out_dir is None:
+        raise ParameterError("profile: --profile writes profile.png; give --out DIR")
+    point, inputs = _physical_point(args)
+    for name, prior in priors.items():
+        if name == OFFSET:
+            continue
+        given = point.values[point.index(name)]
+        if not 0.01 <= prior.mean / given <= 100.0:
+            raise ParameterError(
+                f"prior {name}: mean {prior.mean:g} {UNITS[name]} is {prior.mean / given:.3g} "
+                f"times the wire's {given:g} {UNITS[name]}; give SI units"
+                + (" or tesla with a T suffix (1.2T)" if UNITS[name] == "A/m" else ""))
+    inputs["sigma-deg"] = _entry(args.sigma_deg, "deg", "given" if args.sigma_given
+                                 else "default")
+    cal = fit(measured, free, point, priors, args.sigma_deg, bounds)
+    out = cal.as_dict() | {"inputs": inputs} | _legacy_fit_keys(cal)
+    profiles = []
+    if args.profile:
+        profiles = [profile(measured, name, free, point, priors, args.sigma_deg, fitted=cal)
+                    for name in free]
+        out["profiles"] = profiles
+    if out_dir is not None:
+        (out_dir / "fit.json").write_text(json.dumps(out, indent=1))
+        if profiles:
+            from jaxrod.plotting import profile_figure
+
+            profile_figure(profiles, cal).savefig(out_dir / "profile.png", dpi=120)
     if args.json:
-        print(json.dumps(dict(result) | {"inputs": inputs}))
-        if not result["converged"]:
-            _not_converged("fit", result["reason"])
-        return 0 if result["converged"] else 1
-    print(_inputs_line(inputs))
-    if not result["converged"]:
-        print(f"NOT CONVERGED after {result['iterations']} iterations: {result['reason']}")
-        print(f"last iterate (not an estimate): E = {result['E_Pa'] / 1e9:.4f} GPa")
-        _not_converged("fit", result["reason"])
-        return 1
-    print(f"E = {result['E_Pa'] / 1e9:.4f} +- {result['E_std_Pa'] / 1e9:.4f} GPa "
-          f"(1 standard deviation, Gauss-Newton, sigma = {args.sigma_deg} deg per angle)")
-    if args.offset:
-        print(f"offset = {result['offset_deg']:.4f} +- {result['offset_std_deg']:.4f} deg")
+        print(json.dumps(out))
+    else:
+        print(_inputs_line(inputs))
+        _print_calibration(cal, ANGLE_NAMES)
+        if out_dir is not None:
+            print(f"wrote {out_dir / 'fit.json'}" + (", profile.png" if profiles else ""))
+    if not cal.converged:
+        _not_converged("fit", cal.reason)
+    return 0 if cal.converged else 1
+
+
+def _legacy_fit_keys(cal) -> dict:
+    """The keys of the one-parameter fit's JSON (E_Pa, offset_deg, ...), for scripts."""
+    est, std = cal.estimates, cal.std
+    return {"E_Pa": est.get("E"), "E_std_Pa": std.get("E"),
+            "offset_deg": est.get("offset", 0.0), "offset_std_deg": std.get("offset", 0.0),
+            "warning": "; ".join(cal.warnings) or None}
+
+
+def _print_calibration(cal, angle_names) -> None:
+    if not cal.converged:
+        print(f"NOT CONVERGED after {cal.iterations} iterations: {cal.reason}")
+        print("last iterate (not an estimate): " + ", ".join(
+            f"{n} = {v:.6g} {cal.units[n]}" for n, v in cal.estimates.items()))
+        return
+    priors = ", ".join(f"{n} = {p.mean:.6g} +- {p.sd:.3g} {cal.units.get(n, '')}"
+                       for n, p in cal.priors.items())
+    print(f"free: {', '.join(cal.free)}" + (f"; priors: {priors}" if priors else "")
+          + f"; sigma = {cal.sigma_deg:g} deg per angle")
+    for n, v in cal.estimates.items():
+        scale, unit = (1e9, "GPa") if n == "E" else (1.0, cal.units[n])
+        sd = cal.std[n]
+        spread = (f"+- {sd / scale:.6g}" if sd is not None else
+                  "(no standard deviation: not fixed by the angles and priors)")
+        print(f"  {n:16s} = {v / scale:.6g} {spread} {unit}")
+    if len(cal.free) > 1:
+        print("correlations: " + ", ".join(
+            f"{a}/{b} {cal.correlation[i, j]:+.3f}" for i, a in enumerate(cal.free)
+            for j, b in enumerate(cal.free) if j > i and math.isfinite(cal.correlation[i, j])))
     print("residuals (model - measured):")
-    for name, r in zip(ANGLE_NAMES, result["residuals_deg"]):
+    for name, r in zip(angle_names, cal.residuals_deg):
         if r is not None:
             print(f"  {name:12s} {r:+.4f} deg")
-    print(f"reduced chi^2 = {result['reduced_chi2']:.4g} (sum of (residual / sigma)^2 per "
-          "degree of freedom; ~1 when sigma is right)")
-    print(f"converged: True after {result['iterations']} iterations")
-    if result["warning"]:
-        print(f"warning: {result['warning']}")
-    return 0
+    red = "undefined (no degree of freedom)" if cal.reduced_chi2 is None else \
+        f"{cal.reduced_chi2:.4g}"
+    print(f"chi^2 = {cal.chi2:.4g} (angles and priors), {cal.dof} degrees of freedom, "
+          f"reduced chi^2 = {red} (~1 when sigma is right)")
+    for e in cal.identifiability:
+        print(("the angles fix " if e["fixed_by_angles"] else "the angles CANNOT fix ")
+              + e["combination_text"]
+              + (f" (std {e['std']:.3g})" if e["std"] is not None else ""))
+    for w in cal.warnings:
+        print(f"warning: {w}")
+    print(f"converged: True after {cal.iterations} iterations")
+
+
+PAPER_GROUPS = {"G": 2.2, "M": 0.0236, "D": 11.25 / 9.2}
+
+
+def cmd_design(args) -> int:
+    from jaxrod.analysis.design import design
+
+    vary = _names(args.vary, "vary")
+    groups = any(getattr(args, k) is not None for k in ("G", "M", "D", "magnet_radius"))
+    if groups:
+        filled = {}
+        for k in GROUP_NAMES:
+            if getattr(args, k) is None:
+                if k not in vary:
+                    raise ParameterError(f"{k}: give --{k} (only varied groups may be left "
+                                         "out; they start from the paper's value)")
+                filled[k] = PAPER_GROUPS[k]
+                setattr(args, k, PAPER_GROUPS[k])
+        point, inputs = _design_point_from_args(args)
+        for k, v in filled.items():
+            inputs[k] = _entry(v, "", "start: the paper's value")
+    else:
+        args.D_ratio = None
+        point, inputs = _physical_point(args)
+        inputs = _with_n(inputs, args)
+    allowed = point.names
+    bounds = _pairs(args.bounds, "bounds", allowed)
+    result = design(point, args.capture, args.release, vary, bounds)
+    out = result.as_dict() | {"inputs": inputs}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(_inputs_line(inputs))
+        print(f"targets: capture {result.capture_deg:g} deg, release {result.release_deg:g} deg"
+              f"; varying {', '.join(vary)} within " + ", ".join(
+                  f"[{lo:.6g}, {hi:.6g}]" for lo, hi in result.bounds.values())
+              + f" ({result.starts} starts)")
+        for i, d in enumerate(result.designs):
+            values = ", ".join(f"{n} = {v:.10g} {UNITS[n]}".rstrip() for n, v in d.values.items())
+            check = (f"locate_folds: {d.verified_capture_deg:.10f} / "
+                     f"{d.verified_release_deg:.10f} deg" if d.verified_capture_deg is not None
+                     else "locate_folds found no two folds")
+            print(f"design {i + 1}: {values}  (model folds {d.capture_deg:.10f} / "
+                  f"{d.release_deg:.10f} deg; {check}; verified: {d.verified})")
+    ok = bool(result.designs) and result.designs[0].verified
+    if not ok:
+        _not_converged("design", "the fresh locate_folds at the design disagrees with the "
+                       "model's folds")
+    return 0 if ok else 1
 
 
 def cmd_track(args) -> int:
@@ -1005,11 +1177,12 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--quiet", action="store_true", help="no progress bar")
     w.set_defaults(func=cmd_sweep)
 
-    ft = sub.add_parser("fit", help="Young's modulus from measured switching angles",
+    ft = sub.add_parser("fit", help="calibrate E and other inputs on measured switching angles",
                         description="Angles in degrees, sign of the magnet angle (positive "
                         "towards e1), in the order of the protocol: capture and release of the "
                         "clockwise sweep (alpha increasing), then capture and release of the "
-                        "counter-clockwise sweep.")
+                        "counter-clockwise sweep. The wire and magnet are the paper's unless "
+                        "given (--E, --length, --track-radius, ...).")
     ft.add_argument("--preset", choices=["permanent-magnet"], default=None)
     ft.add_argument("--angles", type=_float("angles"), nargs="+",
                     help="CW_CAPTURE CW_RELEASE CCW_CAPTURE CCW_RELEASE (deg)")
@@ -1017,12 +1190,47 @@ def build_parser() -> argparse.ArgumentParser:
         ft.add_argument("--" + name.replace("_", "-"), dest=name, type=_float(name),
                         default=None, help="one measured angle (deg); omit the others")
     ft.add_argument("--sigma-deg", type=_float("sigma-deg", "sigma-deg"), default=None,
-                    help="measurement error per angle (deg)")
+                    help="measurement error per angle (deg, default 1)")
+    ft.add_argument("--free", default=None, help="comma-separated inputs to fit: E, "
+                    "remanence, magnet-diameter, track-radius, length, diameter, offset, ... "
+                    "(default E, and offset with --offset)")
+    ft.add_argument("--prior", action="append", default=[], metavar="NAME=MEAN:SD",
+                    help="Gaussian prior in the input's SI units (tesla allowed for "
+                    "magnetisations: remanence=1.0T:0.05T); repeatable")
+    ft.add_argument("--bounds", action="append", default=[], metavar="NAME=LO:HI",
+                    help="bounds of a free input; repeatable")
     ft.add_argument("--offset", action="store_true", help="fit an offset of the angle scale")
-    ft.add_argument("--D", type=_float("D", "D"), default=None,
-                    help="override track radius / L")
+    ft.add_argument("--D", dest="D_ratio", type=_float("D", "D"), default=None,
+                    help="track radius / L (sets --track-radius)")
+    ft.add_argument("--E", type=_float("E", "E"), help="Young's modulus, Pa (default 200e9)")
+    ft.add_argument("--diameter", type=_float("diameter", "diameter"), help="wire diameter, m")
+    ft.add_argument("--length", type=_float("length", "length"), help="rod length, m")
+    ft.add_argument("--rod-magnetisation", type=_float("rod-magnetisation", "rod-magnetisation"),
+                    help="the wire's saturation magnetisation, A/m")
+    ft.add_argument("--magnet-diameter", type=_float("magnet-diameter", "magnet-diameter"),
+                    help="m")
+    ft.add_argument("--remanence", type=_float("remanence", "remanence"),
+                    help="the magnet's remanent magnetisation, A/m")
+    ft.add_argument("--track-radius", type=_float("track-radius", "track-radius"), help="m")
+    ft.add_argument("--profile", action="store_true",
+                    help="profile likelihood of each free input (profile.png in --out)")
+    ft.add_argument("--out", default=None, help="directory for fit.json (and profile.png)")
     ft.add_argument("--json", action="store_true")
+    ft.set_defaults(G=None, M=None, D=None, magnet_radius=None)
     ft.set_defaults(func=cmd_fit)
+
+    de = sub.add_parser("design", help="inputs whose folds capture and release at target "
+                        "angles (inverse design)")
+    magnet_inputs(de)
+    de.add_argument("--capture", type=_float("capture", "angle"), required=True,
+                    help="target capture angle (the lower fold), deg")
+    de.add_argument("--release", type=_float("release", "angle"), required=True,
+                    help="target release angle (the upper fold), deg")
+    de.add_argument("--vary", required=True, help="comma-separated inputs to solve for, "
+                    "e.g. track-radius,magnet-diameter or D,M")
+    de.add_argument("--bounds", action="append", default=[], metavar="NAME=LO:HI",
+                    help="bounds of a varied input (default: a factor 3 either side)")
+    de.set_defaults(func=cmd_design)
 
     cu = sub.add_parser("cusp", help="the cusp where the hysteresis ends, varying one input")
     magnet_inputs(cu)

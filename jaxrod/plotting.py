@@ -187,3 +187,25 @@ def design_map_figure(data: dict, spec, cusps=()):
         ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     return fig
+
+
+def profile_figure(profiles: list, calibration=None):
+    """Profile likelihoods (chi^2 minimised over the other free inputs) of each fitted
+    input, with the Laplace (quadratic) approximation and the 68% level (chi^2_min + 1)."""
+    fig, axes = plt.subplots(1, len(profiles), figsize=(4.2 * len(profiles), 3.6),
+                             squeeze=False)
+    for ax, prof in zip(axes[0], profiles):
+        scale, unit = (1e9, "GPa") if prof["name"] == "E" else (1.0, "")
+        x = np.asarray(prof["values"]) / scale
+        ax.plot(x, prof["chi2"], "o-", ms=3, label="profile")
+        if prof["laplace_chi2"] is not None:
+            ax.plot(x, prof["laplace_chi2"], "--", label="Laplace")
+        ax.axhline(prof["chi2_min"] + 1.0, color="0.5", lw=0.8, label=r"$\chi^2_{min}+1$")
+        ax.axvline(prof["estimate"] / scale, color="0.7", lw=0.8)
+        if calibration is not None and calibration.units.get(prof["name"]):
+            unit = unit or calibration.units[prof["name"]]
+        ax.set_xlabel(f"{prof['name']}" + (f" ({unit})" if unit else ""))
+        ax.set_ylabel(r"$\chi^2$")
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig

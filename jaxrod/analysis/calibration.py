@@ -39,7 +39,7 @@ import jax.numpy as jnp
 
 from jaxrod.analysis.batch import fold_pair_states
 from jaxrod.analysis.fold_curves import groups_of
-from jaxrod.analysis.magnet import valid_groups
+from jaxrod.analysis.magnet import fold_guesses, valid_groups
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import GROUP_NAMES, PHYSICAL_NAMES
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
@@ -116,11 +116,12 @@ def _in_bounds(problem: Problem, p):
 
 def fold_states_at(scene: DipoleMagnet, z, disc):
     """The two folds' Moore-Spence solutions from states z (2, 2m + 1) at nearby
-    parameters, implicitly differentiable in the scene: (z_new, ok); ok is False when a
-    solve fails or the folds leave 0 < lower < upper <= 90 degrees."""
+    parameters, implicitly differentiable in the scene, lower fold first: (z_new, ok); ok is
+    False when a solve fails or the folds leave 0 < lower < upper <= 90 degrees."""
     m = disc.size
     z_new, stats = jax.vmap(lambda zi: differentiable_fold(
         ALPHA_MODEL, zi[:m], zi[-1], zi[m:2 * m], (scene, disc)))(z)
+    z_new = jnp.where(z_new[0, -1] <= z_new[1, -1], z_new, z_new[::-1])  # lower fold first
     alphas = z_new[:, -1]
     ok = jnp.all(stats[:, 0] == 1.0) & (alphas[0] > 0.0) & (alphas[1] - alphas[0] > 1e-9) \
         & (alphas[1] <= 0.5 * jnp.pi)
@@ -172,6 +173,22 @@ def evaluate(kind: str, problem: Problem, p, z, disc):
     return (jnp.concatenate([r_data, r_prior]), jnp.concatenate([J_data, J_prior]), z_new, ok)
 
 
+def start_states(scene: DipoleMagnet, disc):
+    """The two fold states (2, 2m + 1) at the start, and whether both exist: from the
+    one-mode brackets (``fold_pair_states``, fixed cost) where they succeed, else from a
+    continuation from the straight rod (``jaxrod.analysis.magnet`` fold guesses), which
+    also finds narrow loops that the one-mode grid misses."""
+    z, found, _ = fold_pair_states(scene.G, scene.M, scene.D, disc)
+
+    def by_continuation(_):
+        x0, lam0, phi0, ok = fold_guesses(scene, disc)
+        z_c = jnp.concatenate([x0, phi0, lam0[:, None]], axis=1)
+        z_c, solved = fold_states_at(scene, z_c, disc)
+        return z_c, ok & solved
+
+    return jax.lax.cond(found, lambda _: (z, found), by_continuation, None)
+
+
 class Solution(NamedTuple):
     """A solved problem: the least-squares result, whether the start states existed, and
     the model angles at the answer (degrees)."""
@@ -185,7 +202,7 @@ def _solve(kind: str, problem: Problem, max_iter: int = 60) -> Solution:
     disc = planar_discretisation(MODEL_N, "clamped")
     values, _ = values_of(problem, problem.p_start)
     scene, valid = _scene(kind, problem, values)
-    z0, found, _ = fold_pair_states(scene.G, scene.M, scene.D, disc)
+    z0, found = start_states(scene, disc)
     found = found & valid
     n_res = 4 + problem.free.shape[0]
     res = least_squares_run(lambda p, z: evaluate(kind, problem, p, z, disc),

@@ -508,7 +508,7 @@ def _calibration(point, problem, solution, free, priors, mask, n_rows) -> Calibr
                             f"{entry['combination_text']}")
     sigma = float(problem.sigma)
     residuals = [float(v * sigma) if m else None for v, m in zip(r[:4], mask)]
-    chi2 = float(np.dot(r, r))
+    chi2 = float(np.dot(r, r)) if bool(solution.found) else math.nan
     dof = n_rows - len(free)
     reduced = chi2 / dof if dof > 0 else None
     if reduced is not None and reduced > 9.0:
@@ -544,9 +544,11 @@ def _identifiability(J_angles: np.ndarray, free) -> list:
         terms = {name: float(c) for name, c in zip(free, v) if abs(c) > 0.05}
         text = " ".join(f"{c:+.3g} {'offset' if n == OFFSET else 'log ' + n}"
                         for n, c in terms.items())
-        fixed = bool(lam[k] > FISHER_RANK_TOL * top)
+        offset_only = set(terms) == {OFFSET}
+        limit = MEANINGLESS_STD["offset" if offset_only else "relative"]
+        fixed = bool(lam[k] > FISHER_RANK_TOL * top) and 1.0 / math.sqrt(lam[k]) <= limit
         out.append({"eigenvalue": float(lam[k]), "fixed_by_angles": fixed,
-                    "std": float(1.0 / math.sqrt(lam[k])) if fixed else None,
+                    "std": float(1.0 / math.sqrt(lam[k])) if lam[k] > 0 else None,
                     "combination": terms, "combination_text": text})
     return out
 
@@ -586,7 +588,7 @@ def profile(measured, name: str, free=("E", OFFSET), point: DesignPoint | None =
         else:
             prior = (priors or {}).get(name)
             extra = ((v - prior.mean) / prior.sd) ** 2 if prior is not None else 0.0
-            chi2.append(cal.chi2 + extra)
+            chi2.append(cal.chi2 + extra if cal.converged else math.nan)
             converged.append(cal.converged)
     laplace = (None if sd is None else
                (best.chi2 + ((np.asarray(values) - centre) / sd) ** 2).tolist())

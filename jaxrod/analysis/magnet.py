@@ -187,7 +187,7 @@ def _refine_program(theta0, alpha0, scene, disc, tol):
 _refine_batch = StoredProgram("magnet-refine", _refine_program)
 
 
-def _fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
+def fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
     """Approximate folds from a one-sided continuation that stops after the second fold."""
     options = default_options(0)._replace(max_folds=2.0, lam_min=-0.1)
     start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc),
@@ -240,7 +240,7 @@ def _fold_angles_program(G, M, D, n: int, tol: float):
     G, M, D = (jnp.where(valid, v, x) for v, x in zip((G, M, D), (1.0, 0.0, 2.0)))
     scene = DipoleMagnet(G, M, D, 0.0)
     disc = planar_discretisation(n, "clamped")
-    x0, lam0, phi0, found = _fold_guesses(jax.lax.stop_gradient(scene), disc)
+    x0, lam0, phi0, found = fold_guesses(jax.lax.stop_gradient(scene), disc)
     solve = lambda x, l, p: differentiable_fold(ALPHA_MODEL, x, l, p, (scene, disc), tol)
     z, stats = jax.vmap(solve)(x0, lam0, phi0)
     alphas = jnp.sort(z[:, -1])
