@@ -137,6 +137,18 @@ def tracked_angles(kind: str, problem: Problem, p, z, disc):
     return angles_from_folds(z_new[:, -1], offset), z_new, ok & valid & _in_bounds(problem, p)
 
 
+def residuals(kind: str, problem: Problem, p, z, disc):
+    """(r, z_new, ok): the angle residuals (4) and the prior residuals (K + 1) at p."""
+    model, z_new, ok = tracked_angles(kind, problem, p, z, disc)
+    target = jnp.where(problem.mask, problem.measured, 0.0)
+    r_data = jnp.where(problem.mask, (model - target) / problem.sigma, 0.0)
+    q = physical_parameters(problem, p)
+    use = problem.has_prior & problem.free
+    sd = jnp.where(use, problem.prior_sd, 1.0)
+    r_prior = jnp.where(use, (q - problem.prior_mean) / sd, 0.0)
+    return jnp.concatenate([r_data, r_prior]), z_new, ok
+
+
 def evaluate(kind: str, problem: Problem, p, z, disc):
     """(r, J, z_new, ok) for ``least_squares_run``: r = the angle residuals (4) and the
     prior residuals (K + 1), J = dr/dp by the chain rule through the groups: the folds are

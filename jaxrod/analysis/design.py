@@ -26,7 +26,7 @@ from jaxrod.analysis.calibration import OFFSET, parameter_names, solve_program
 from jaxrod.analysis.fit import _check_bounds, _check_names, _problem
 from jaxrod.analysis.fold_curves import DesignPoint, range_of
 from jaxrod.analysis.magnet import locate_folds, make_scene
-from jaxrod.params import RANGES, UNITS, ParameterError
+from jaxrod.params import UNITS, ParameterError, check_value
 
 #: A design hits its targets when the model's folds lie within this of them (degrees).
 HIT_DEG = 1e-6
@@ -85,9 +85,11 @@ class DesignResult:
 
 def check_targets(capture_deg: float, release_deg: float) -> tuple[float, float]:
     """Validate the target angles: 0 < capture < release < 90 degrees."""
-    angle = RANGES["angle"]
-    capture = angle.check(capture_deg)
-    release = angle.check(release_deg)
+    capture = check_value("capture", capture_deg, lambda x: -90.0 < x < 90.0,
+                          "an angle in (0, 90) degrees")
+    release = check_value("release", release_deg, lambda x: -90.0 < x < 90.0,
+                          "an angle in (0, 90) degrees (a release beyond 90 degrees is past "
+                          "the horizontal)")
     if not capture > 0.0:
         raise ParameterError(f"capture: the capture angle is the lower fold, in (0, 90) "
                              f"degrees, got {capture_deg!r}")
