@@ -120,6 +120,17 @@ TABLE = [
     (["cusp", *PAPER, "--vary", "E"], "vary"),
     (["foldcurve", *PAPER, "--vary", "D", "--to", "nan"], "to"),
     (["map", *PAPER, "--x", "D:1.1:1.3:4", "--y", "K:1:2:4", "--out", "unused"], "K"),
+    (["fit", *ANGLES, "--free", "E,stiffness"], "stiffness"),
+    (["fit", *ANGLES, "--free", "E,remanence", "--prior", "remanence=8e5:0"], "prior sd"),
+    (["fit", *ANGLES, "--free", "E,remanence", "--prior", "remanence=8e5:-1"], "prior sd"),
+    (["fit", *ANGLES, "--free", "E,remanence", "--prior", "remanence=1.2:0.05"],
+     "prior remanence"),
+    (["fit", *ANGLES, "--prior", "remanence"], "prior"),
+    (["fit", *ANGLES, "--bounds", "E=3e11:1e11"], "bounds E"),
+    (["fit", "--angles", "-28", "25", "27.5", "-91"], "angles"),
+    (["design", "--capture", "40", "--release", "30", "--vary", "track-radius"], "release"),
+    (["design", "--capture", "20", "--release", "95", "--vary", "track-radius"], "release"),
+    (["design", "--capture", "20", "--release", "45", "--vary", "K"], "vary"),
 ]
 
 
@@ -146,7 +157,8 @@ OPTIONS = sorted(set(_numeric_options()))
 BASE = {"greenhill": ["--G", "10"], "fit": ANGLES, "reproduce": [],
         "sweep": [*PAPER, "--out", "unused"], "branch": [*PAPER, "--out", "unused"],
         "cusp": [*PAPER, "--vary", "D"], "foldcurve": [*PAPER, "--vary", "D", "--to", "1.3"],
-        "map": [*PAPER, "--x", "D:1.1:1.3:4", "--y", "M:0.02:0.03:4", "--out", "unused"]}
+        "map": [*PAPER, "--x", "D:1.1:1.3:4", "--y", "M:0.02:0.03:4", "--out", "unused"],
+        "design": [*PAPER, "--capture", "25", "--release", "40", "--vary", "D"]}
 
 
 def _outside(valid):

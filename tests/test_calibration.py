@@ -193,3 +193,26 @@ def test_prior_sd_must_be_positive():
         Prior(8e5, 0.0)
     with pytest.raises(ParameterError, match="prior sd"):
         Prior(8e5, -1.0)
+
+
+def test_cli_design_and_fit(capsys):
+    """``jaxrod design`` with the groups: the answer's keys, verified; bounds excluding every
+    bistable design exit 2 with one line (found only by the search, so not time-limited)."""
+    import json
+
+    from jaxrod.cli import main
+
+    assert main(["design", "--G", "2.2", "--capture", "25", "--release", "40", "--vary",
+                 "D,M", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["converged"] and {"D", "M", "capture_deg", "release_deg"} <= set(out)
+    assert abs(out["capture_deg"] - 25) < 1e-6 and abs(out["release_deg"] - 40) < 1e-6
+    assert main(["design", "--G", "2.2", "--capture", "20", "--release", "45", "--vary", "D,M",
+                 "--bounds", "D=1.5:1.6", "--bounds", "M=1e-4:2e-4"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no bistable design" in err[0]
+    assert main(["fit", "--angles", "-25", "38", "24", "-42", "--free", "E,track-radius,offset",
+                 "--prior", "track-radius=0.1125:0.001", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["converged"] and out["std"]["track-radius"] is not None
+    assert out["inputs"]["track-radius"]["source"] == "preset permanent-magnet"
