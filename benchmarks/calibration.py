@@ -127,9 +127,8 @@ def main() -> None:
     res = run(40 if args.quick else 1000)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    name = "calibration_quick" if args.quick else "calibration"
-    (out / f"{name}.json").write_text(json.dumps(res, indent=1))
-    (out / f"{name}.md").write_text(markdown(res))
+    (out / "calibration.json").write_text(json.dumps(res, indent=1))
+    (out / "calibration.md").write_text(markdown(res))
     print(markdown(res))
 
 

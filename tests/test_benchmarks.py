@@ -106,3 +106,12 @@ def test_fold_curves_quick(tmp_path):
     rows = result["convergence"]["rows"]
     assert rows[-1]["cusp_D_error"] < 1e-11 and rows[-1]["second_cusp_D_error"] < 1e-8
     assert all(r["moore_spence_cond"] < 1e6 for r in result["conditioning"])
+
+
+def test_calibration_quick(tmp_path):
+    """40 synthetic experiments: every fit converges with all three deviations, and the
+    coverage of each 68% interval is within 3 binomial standard deviations of 0.68."""
+    result = run_quick("calibration.py", tmp_path)
+    assert result["fits_failed"] == 0 and result["with_two_folds"] == 40
+    for c in result["coverage"].values():
+        assert abs(c["covered_68"] - 0.68) <= 3 * (0.68 * 0.32 / 40) ** 0.5
