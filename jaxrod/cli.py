@@ -1106,15 +1106,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--json", action="store_true", help="print one JSON object")
     g.set_defaults(func=cmd_greenhill)
 
-    def magnet_inputs(p):
-        p.add_argument("--G", type=_float("G", "G-magnet"), help="gravity group, in (0, 1e3]")
-        p.add_argument("--M", type=_float("M", "M"), help="magnet group, in [0, 1e3]")
-        p.add_argument("--D", type=_float("D", "D"), help="track radius / rod length, in "
-                       "(1, 1e3]")
-        p.add_argument("--magnet-radius", type=_float("magnet radius"), default=None,
-                       help="magnet radius / rod length (refuses D <= 1 + radius)")
-        p.add_argument("--preset", choices=["permanent-magnet"],
-                       help="the paper's nickel wire and NdFeB magnet")
+    def physical_inputs(p):
+        """The wire's and the magnet's physical inputs (defaults: the paper's)."""
         p.add_argument("--E", type=_float("E", "E"), help="Young's modulus, Pa (default 200e9)")
         p.add_argument("--diameter", type=_float("diameter", "diameter"),
                        help="wire diameter, m")
@@ -1128,6 +1121,17 @@ def build_parser() -> argparse.ArgumentParser:
                        help="the magnet's remanent magnetisation, A/m (default 8e5)")
         p.add_argument("--track-radius", type=_float("track-radius", "track-radius"),
                        help="m (default 0.1125)")
+
+    def magnet_inputs(p):
+        p.add_argument("--G", type=_float("G", "G-magnet"), help="gravity group, in (0, 1e3]")
+        p.add_argument("--M", type=_float("M", "M"), help="magnet group, in [0, 1e3]")
+        p.add_argument("--D", type=_float("D", "D"), help="track radius / rod length, in "
+                       "(1, 1e3]")
+        p.add_argument("--magnet-radius", type=_float("magnet radius"), default=None,
+                       help="magnet radius / rod length (refuses D <= 1 + radius)")
+        p.add_argument("--preset", choices=["permanent-magnet"],
+                       help="the paper's nickel wire and NdFeB magnet")
+        physical_inputs(p)
         p.add_argument("--n", type=_degree("N-magnet"), default=None,
                        help="Chebyshev degree, 4-64 (default 16)")
         p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -1202,16 +1206,7 @@ def build_parser() -> argparse.ArgumentParser:
     ft.add_argument("--offset", action="store_true", help="fit an offset of the angle scale")
     ft.add_argument("--D", dest="D_ratio", type=_float("D", "D"), default=None,
                     help="track radius / L (sets --track-radius)")
-    ft.add_argument("--E", type=_float("E", "E"), help="Young's modulus, Pa (default 200e9)")
-    ft.add_argument("--diameter", type=_float("diameter", "diameter"), help="wire diameter, m")
-    ft.add_argument("--length", type=_float("length", "length"), help="rod length, m")
-    ft.add_argument("--rod-magnetisation", type=_float("rod-magnetisation", "rod-magnetisation"),
-                    help="the wire's saturation magnetisation, A/m")
-    ft.add_argument("--magnet-diameter", type=_float("magnet-diameter", "magnet-diameter"),
-                    help="m")
-    ft.add_argument("--remanence", type=_float("remanence", "remanence"),
-                    help="the magnet's remanent magnetisation, A/m")
-    ft.add_argument("--track-radius", type=_float("track-radius", "track-radius"), help="m")
+    physical_inputs(ft)
     ft.add_argument("--profile", action="store_true",
                     help="profile likelihood of each free input (profile.png in --out)")
     ft.add_argument("--out", default=None, help="directory for fit.json (and profile.png)")
