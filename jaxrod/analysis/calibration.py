@@ -137,15 +137,21 @@ def tracked_angles(kind: str, problem: Problem, p, z, disc):
     return angles_from_folds(z_new[:, -1], offset), z_new, ok & valid & _in_bounds(problem, p)
 
 
+def _prior_residuals(problem: Problem, q):
+    """(q - mean) / sd for the free parameters with a prior (0 elsewhere), and 1 / sd there
+    (0 elsewhere): the residuals and their derivative in q."""
+    use = problem.has_prior & problem.free
+    scale = jnp.where(use, 1.0 / jnp.where(use, problem.prior_sd, 1.0), 0.0)
+    return (q - problem.prior_mean) * scale, scale
+
+
 def residuals(kind: str, problem: Problem, p, z, disc):
     """(r, z_new, ok): the angle residuals (4) and the prior residuals (K + 1) at p."""
     model, z_new, ok = tracked_angles(kind, problem, p, z, disc)
     target = jnp.where(problem.mask, problem.measured, 0.0)
     r_data = jnp.where(problem.mask, (model - target) / problem.sigma, 0.0)
     q = physical_parameters(problem, p)
-    use = problem.has_prior & problem.free
-    sd = jnp.where(use, problem.prior_sd, 1.0)
-    r_prior = jnp.where(use, (q - problem.prior_mean) / sd, 0.0)
+    r_prior, _ = _prior_residuals(problem, q)
     return jnp.concatenate([r_data, r_prior]), z_new, ok
 
 
@@ -177,10 +183,8 @@ def evaluate(kind: str, problem: Problem, p, z, disc):
     J_data = jnp.where(m, d_model / problem.sigma, 0.0)
     q = jnp.concatenate([values, offset[None]])
     dq = jnp.concatenate([values, jnp.ones(1)])  # dq_i / dp_i (diagonal)
-    use = problem.has_prior & problem.free
-    sd = jnp.where(use, problem.prior_sd, 1.0)
-    r_prior = jnp.where(use, (q - problem.prior_mean) / sd, 0.0)
-    J_prior = jnp.diag(jnp.where(use, dq / sd, 0.0))
+    r_prior, scale = _prior_residuals(problem, q)
+    J_prior = jnp.diag(dq * scale)
     ok = ok & valid & _in_bounds(problem, p)
     return (jnp.concatenate([r_data, r_prior]), jnp.concatenate([J_data, J_prior]), z_new, ok)
 
