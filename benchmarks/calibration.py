@@ -24,27 +24,24 @@ from pathlib import Path
 
 import numpy as np
 
-import jaxrod  # noqa: F401
-from jaxrod.analysis.batch import fold_pairs
-from jaxrod.analysis.design import design
-from jaxrod.analysis.fit import Prior, default_point, fit
+import jaxrod as jr
 from jaxrod.analysis.fold_curves import groups_of
 
 HERE = Path(__file__).resolve().parent
 NOISE_DEG = 0.5
-PRIOR = {"remanence": Prior(8e5, 4e4)}
+PRIOR = {"remanence": jr.Prior(8e5, 4e4)}
 FREE = ("E", "remanence", "offset")
 
 
 def experiments(K: int, seed: int = 1):
     rng = np.random.default_rng(seed)
-    base = np.array(default_point().values)
+    base = np.array(jr.default_point().values)
     values = np.tile(base, (K, 1))
     values[:, 0] = rng.uniform(150e9, 250e9, K)
     values[:, 6] = rng.normal(PRIOR["remanence"].mean, PRIOR["remanence"].sd, K)
     offsets = rng.uniform(-2.0, 2.0, K)
     G, M, D = groups_of("physical", values.T)
-    alphas, converged, _ = fold_pairs(G, M, D)
+    alphas, converged, _ = jr.fold_pairs(G, M, D)
     a = np.degrees(np.asarray(alphas))
     clean = np.stack([-a[:, 0], a[:, 1], a[:, 0], -a[:, 1]], axis=1) + offsets[:, None]
     noisy = clean + NOISE_DEG * rng.normal(size=clean.shape)
@@ -55,14 +52,14 @@ def experiments(K: int, seed: int = 1):
 def run(K: int) -> dict:
     start = time.perf_counter()
     t = time.perf_counter()
-    fit([-25, 38, 24, -42], FREE, priors=PRIOR)
+    jr.fit([-25, 38, 24, -42], FREE, priors=PRIOR)
     compile_fit = time.perf_counter() - t
     truth, measured, ok = experiments(K)
     z = {n: [] for n in FREE}
     failed = 0
     t = time.perf_counter()
     for i in np.flatnonzero(ok):
-        cal = fit(measured[i], FREE, priors=PRIOR, sigma_deg=NOISE_DEG)
+        cal = jr.fit(measured[i], FREE, priors=PRIOR, sigma_deg=NOISE_DEG)
         if not cal.converged or any(cal.std[n] is None for n in FREE):
             failed += 1
             continue
@@ -79,16 +76,16 @@ def run(K: int) -> dict:
     one = []
     for _ in range(20):
         t = time.perf_counter()
-        fit(measured[0], FREE, priors=PRIOR, sigma_deg=NOISE_DEG)
+        jr.fit(measured[0], FREE, priors=PRIOR, sigma_deg=NOISE_DEG)
         one.append(time.perf_counter() - t)
-    point = default_point()
+    point = jr.default_point()
     t = time.perf_counter()
-    design(point, 20.0, 45.0, ("track-radius", "magnet-diameter"))
+    jr.design(point, 20.0, 45.0, ("track-radius", "magnet-diameter"))
     compile_design = time.perf_counter() - t
     designs = []
     for _ in range(3):
         t = time.perf_counter()
-        design(point, 20.0, 45.0, ("track-radius", "magnet-diameter"))
+        jr.design(point, 20.0, 45.0, ("track-radius", "magnet-diameter"))
         designs.append(time.perf_counter() - t)
     return {"experiments": K, "with_two_folds": int(ok.sum()), "fits_failed": failed,
             "noise_deg": NOISE_DEG, "free": list(FREE), "coverage": coverage,

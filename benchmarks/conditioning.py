@@ -16,11 +16,8 @@ from pathlib import Path
 import numpy as np
 from common import benchmark_main, write_results
 
-import jaxrod  # noqa: F401
-from jaxrod.analysis import magnet
-from jaxrod.analysis.conditioning import conditioning_near_fold
-from jaxrod.analysis.reduction import reduced_folds
-from jaxrod.plotting import CONDITIONING_LABELS, conditioning_figure
+import jaxrod as jr
+from jaxrod.plotting import CONDITIONING_LABELS
 
 D_EXP = 11.25 / 9.2
 CASES = {"E = 200 GPa": (2.2, 0.0236), "E = 100 GPa": (4.4, 0.0472)}
@@ -30,14 +27,14 @@ def run(quick: bool) -> dict:
     offsets = np.logspace(-6, -1, 6 if quick else 16)
     studies = {}
     for case, (G, M) in CASES.items():
-        scene = magnet.make_scene(G, M, D_EXP)
-        for fold in reduced_folds(scene):
+        scene = jr.magnet_scene(G, M, D_EXP)
+        for fold in jr.reduced_folds(scene):
             if quick and fold.kind == "lower":
                 continue
             # the side of the fold towards the straight rod (engaged branch for the upper fold)
             side = -1.0 if fold.kind == "upper" else 1.0
             title = f"{case}, {fold.kind} fold (alpha* = {fold.alpha_deg:.4f} deg)"
-            studies[title] = conditioning_near_fold(scene, fold, offsets=offsets, side=side)
+            studies[title] = jr.conditioning_near_fold(scene, fold, offsets=offsets, side=side)
             print(title, flush=True)
     return studies
 
@@ -63,7 +60,7 @@ def markdown(studies: dict) -> str:
 
 def write(studies: dict, out: Path) -> None:
     write_results(out, "conditioning", studies, markdown(studies),
-                  conditioning_figure(studies))
+                  jr.conditioning_figure(studies))
 
 
 def main(argv=None) -> int:

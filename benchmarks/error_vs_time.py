@@ -41,10 +41,7 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 import peers  # noqa: E402
 
-import jaxrod  # noqa: E402, F401
-from jaxrod.analysis import magnet  # noqa: E402
-from jaxrod.analysis.batch import fold_pairs  # noqa: E402
-from jaxrod.analysis.reduction import reduced_folds  # noqa: E402
+import jaxrod as jr  # noqa: E402
 from jaxrod.reproduce import PAPER_FOLDS  # noqa: E402
 
 D_EXP = 11.25 / 9.2
@@ -62,7 +59,7 @@ def best_time(fn, repeat):
 
 
 def reference(G, M):
-    alphas, ok = magnet.fold_pair(magnet.make_scene(G, M, D_EXP), n=24)
+    alphas, ok = jr.fold_pair(jr.magnet_scene(G, M, D_EXP), n=24)
     assert ok
     return np.asarray(alphas)
 
@@ -103,7 +100,7 @@ def run(quick: bool, auto: bool) -> dict:
         refs[E] = ref.tolist()
         printed = [float(PAPER_FOLDS[E][k][3]) for k in ("lower", "upper")]
         assert np.max(np.abs(ref - printed)) < 2.5e-3, "reference disagrees with the paper"
-        scene = magnet.make_scene(G, M, D_EXP)
+        scene = jr.magnet_scene(G, M, D_EXP)
 
         def add(method, setting, found, seconds, diagram_s=None):
             row = {"E": E, "method": method, "setting": setting,
@@ -114,16 +111,16 @@ def run(quick: bool, auto: bool) -> dict:
             print(json.dumps(row), flush=True)
 
         for n in ns_ms:
-            (alphas, ok), t = best_time(lambda: magnet.fold_pair(scene, n=n), repeat)
-            _, td = best_time(lambda: magnet.trace_diagram(scene, n), max(3, repeat // 4))
+            (alphas, ok), t = best_time(lambda: jr.fold_pair(scene, n=n), repeat)
+            _, td = best_time(lambda: jr.diagram(scene, n), max(3, repeat // 4))
             add("jaxrod Moore-Spence (fold_pair)", f"N={n}", alphas, t, td)
-            (a, c, _), t = best_time(lambda: fold_pairs([G], [M], [D_EXP], n=n), repeat)
+            (a, c, _), t = best_time(lambda: jr.fold_pairs([G], [M], [D_EXP], n=n), repeat)
             add("jaxrod batch path (fold_pairs, K=1)", f"N={n}", np.degrees(np.asarray(a)[0]), t)
         for n in ns_reduced:
-            folds, t = best_time(lambda: reduced_folds(scene, n=n), max(3, repeat // 4))
+            folds, t = best_time(lambda: jr.reduced_folds(scene, n=n), max(3, repeat // 4))
             add("jaxrod reduced route", f"N={n}", [f.alpha_deg for f in folds], t)
         for n in ns_cont:
-            branch, t = best_time(lambda: magnet.trace_diagram(scene, n), max(3, repeat // 4))
+            branch, t = best_time(lambda: jr.diagram(scene, n), max(3, repeat // 4))
             add("jaxrod continuation only", f"N={n}", continuation_only(branch), t, t)
         for tol, step in bvp_settings:
             t0 = time.perf_counter()

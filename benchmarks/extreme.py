@@ -25,14 +25,13 @@ from pathlib import Path
 
 from common import benchmark_main
 
-import jaxrod  # noqa: F401
-from jaxrod.analysis import magnet
+import jaxrod as jr
 
 D_EXP = 11.25 / 9.2
 
 
 def fold_count(G, M, D, n=16):
-    return len(magnet.locate_folds(magnet.make_scene(G, M, D), n=n).folds)
+    return len(jr.folds(jr.magnet_scene(G, M, D), n=n).folds)
 
 
 def cusp_magnet_group(G, D, lo=0.002, hi=0.0236, steps=30):
@@ -75,12 +74,12 @@ def run(quick: bool) -> dict:
         cases = [c for c in cases if c[0] in keep]
     rows = []
     for name, G, M, D in cases:
-        scene = magnet.make_scene(G, M, D)
+        scene = jr.magnet_scene(G, M, D)
         t0 = time.perf_counter()
-        ref = magnet.locate_folds(scene, n=64)
+        ref = jr.folds(scene, n=64)
         per_n = {}
         for n in degrees:
-            rep = magnet.locate_folds(scene, n=n)
+            rep = jr.folds(scene, n=n)
             per_n[n] = [f.alpha_deg for f in rep.folds]
         ok = [n for n, a in per_n.items() if len(a) == len(ref.folds)
               and all(abs(x - f.alpha_deg) <= 1e-10 for x, f in zip(a, ref.folds))]
@@ -109,18 +108,15 @@ def reduced_route(scene, folds) -> dict:
     import numpy as np
 
     from jaxrod.analysis.contraction import contraction_constants
-    from jaxrod.analysis.reduction import reduced_folds, reduction
-    from jaxrod.discretise.planar import planar_discretisation
-    from jaxrod.params import ParameterError
 
     try:
-        red_folds = reduced_folds(scene, n=32)
-    except ParameterError as err:
+        red_folds = jr.reduced_folds(scene, n=32)
+    except jr.ParameterError as err:
         return {"message": str(err)}
     if len(red_folds) != len(folds) or not folds:
         return {"message": f"{len(red_folds)} one-mode folds against {len(folds)} folds"}
-    disc = planar_discretisation(32)
-    red = reduction(scene, disc)
+    disc = jr.planar_discretisation(32)
+    red = jr.reduction(scene, disc)
     K = [float(contraction_constants(f.q, np.radians(f.alpha_deg), red, scene, disc)["K"])
          for f in red_folds]
     return {"converged": all(f.converged for f in red_folds),
@@ -130,22 +126,20 @@ def reduced_route(scene, folds) -> dict:
 
 
 def greenhill_cases(quick: bool) -> list[dict]:
-    from jaxrod.analysis.greenhill import greenhill
-
     cases = [("clamped", 1e2, 1e4), ("clamped", 1e4, 1e4), ("pinned", 1e4, 1e4)]
     if not quick:
         cases += [("clamped", 1e3, 1e4), ("pinned", 1e3, 1e4), ("clamped", 1e4, 1e3)]
     out = []
     for support, G, A in cases:
-        ref = greenhill(G, support, A=A, n=160)
-        per_n = {n: greenhill(G, support, A=A, n=n) for n in (16, 24, 32, 40, 48, 64, 96)}
+        ref = jr.greenhill(G, support, A=A, n=160)
+        per_n = {n: jr.greenhill(G, support, A=A, n=n) for n in (16, 24, 32, 40, 48, 64, 96)}
         ok = [n for n, r in per_n.items()
               if abs(r.beta0 - ref.beta0) <= 1e-10 * abs(ref.beta0)
               and abs((A + r.beta0) - (A + ref.beta0)) <= 1e-10 * abs(A + ref.beta0)]
         row = {"support": support, "G": G, "A": A, "beta0": ref.beta0,
                "margin": A + ref.beta0, "stable": ref.stable, "criticality": ref.criticality,
                "N_for_1e-10": min(ok) if ok else None,
-               "default_N": greenhill(G, support, A=A).n}
+               "default_N": jr.greenhill(G, support, A=A).n}
         out.append(row)
         print(f"Greenhill {support} G={G:g} A={A:g}: beta0 = {ref.beta0:.10g}, margin "
               f"{row['margin']:.6g}, N for 1e-10: {row['N_for_1e-10']}", flush=True)

@@ -24,7 +24,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-import jaxrod  # noqa: F401
+import jaxrod as jr
 from jaxrod.analysis import fit
 
 HERE = Path(__file__).resolve().parent
@@ -43,10 +43,10 @@ def synthetic(K: int, seed: int = 0):
 def vmap_only(K: int, out: Path) -> int:
     E_true, measured = synthetic(K)
     t0 = time.perf_counter()
-    fit.fit_batch(measured, 0.5, True, method="vmap")
+    jr.fit_batch(measured, 0.5, True, method="vmap")
     first = time.perf_counter() - t0
     t0 = time.perf_counter()
-    results = fit.fit_batch(measured, 0.5, True, method="vmap")
+    results = jr.fit_batch(measured, 0.5, True, method="vmap")
     warm = time.perf_counter() - t0
     z = np.array([(r["E_Pa"] - e) / r["E_std_Pa"] for r, e in zip(results, E_true)])
     conv = sum(r["converged"] for r in results)
@@ -73,12 +73,12 @@ def main(argv=None) -> int:
         return vmap_only(args.vmap_only, Path(args.out))
     paper = [-25.0, 38.0, 24.0, -42.0]
     t0 = time.perf_counter()
-    fit.fit_youngs_modulus(paper, 1.0, True)
+    jr.fit_youngs_modulus(paper, 1.0, True)
     first = time.perf_counter() - t0
     warm = math.inf
     for _ in range(3 if args.quick else 10):
         t0 = time.perf_counter()
-        r = fit.fit_youngs_modulus(paper, 1.0, True)
+        r = jr.fit_youngs_modulus(paper, 1.0, True)
         warm = min(warm, time.perf_counter() - t0)
     print(f"one fit: compile+run {first:.1f} s, warm {1e3 * warm:.0f} ms "
           f"({r['iterations']} L-BFGS iterations), E = {r['E_Pa'] / 1e9:.3f} GPa", flush=True)
@@ -87,13 +87,13 @@ def main(argv=None) -> int:
     E_true, measured = synthetic(K)
     Kv = K if args.quick else 16  # vmapped batches on the CPU are slow (see the docstring)
     t0 = time.perf_counter()
-    results = fit.fit_batch(measured[:Kv], 0.5, True, method="vmap")
+    results = jr.fit_batch(measured[:Kv], 0.5, True, method="vmap")
     batch_first = time.perf_counter() - t0  # compile (for this K) + run
     t0 = time.perf_counter()
-    results = fit.fit_batch(measured[:Kv], 0.5, True, method="vmap")
+    results = jr.fit_batch(measured[:Kv], 0.5, True, method="vmap")
     batch = time.perf_counter() - t0
     t0 = time.perf_counter()
-    sequential = fit.fit_batch(measured, 0.5, True, method="loop", progress=not args.quick)
+    sequential = jr.fit_batch(measured, 0.5, True, method="loop", progress=not args.quick)
     loop = time.perf_counter() - t0
     z = np.array([(r["E_Pa"] - e) / r["E_std_Pa"] for r, e in zip(sequential, E_true)])
     conv = sum(r["converged"] for r in sequential)

@@ -45,7 +45,7 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 from common import RESULTS, write_results  # noqa: E402
 
-import jaxrod  # noqa: E402,F401
+import jaxrod as jr  # noqa: E402
 from jaxrod.analysis import fold_curves as fc  # noqa: E402
 
 G0, M0, D0 = 2.2, 0.0236, 11.25 / 9.2
@@ -53,13 +53,13 @@ LOW_END = 1.015
 
 
 def _point():
-    return fc.DesignPoint.from_groups(G0, M0, D0)
+    return jr.DesignPoint.from_groups(G0, M0, D0)
 
 
 def _jaxrod_pair(n=fc.DEFAULT_N):
     """(first cusp, second cusp) from the two fold_curves runs."""
-    up = fc.fold_curves(_point(), "D", 1.5, n=n)
-    down = fc.fold_curves(_point(), "D", LOW_END, n=n)
+    up = jr.fold_curves(_point(), "D", 1.5, n=n)
+    down = jr.fold_curves(_point(), "D", LOW_END, n=n)
     return up.cusp, down.cusp, up, down
 
 
@@ -70,9 +70,9 @@ def jaxrod_timing(repeat: int = 3) -> dict:
     warm, warm_up = [], []
     for _ in range(repeat):
         t0 = time.perf_counter()
-        fc.fold_curves(_point(), "D", 1.5)
+        jr.fold_curves(_point(), "D", 1.5)
         t1 = time.perf_counter()
-        fc.fold_curves(_point(), "D", LOW_END)
+        jr.fold_curves(_point(), "D", LOW_END)
         warm.append(time.perf_counter() - t0)
         warm_up.append(t1 - t0)
     # AUTO's route: one curve from the lower fold through the first cusp to the second
@@ -110,14 +110,13 @@ def convergence(ns, n_ref) -> dict:
 def conditioning(samples: int = 8) -> list[dict]:
     """2-norm condition numbers of the two fold formulations' corrector Jacobians at points
     of the lower fold's curve approaching the cusp."""
-    from jaxrod.discretise.planar import planar_discretisation
     from jaxrod.scenes.dipole import ALPHA_MODEL
     from jaxrod.solvers.fold_curve import fold_linearisation
 
     point = _point()
-    up = fc.fold_curves(point, "D", 1.5)
+    up = jr.fold_curves(point, "D", 1.5)
     lower = up.curves[0]
-    disc = planar_discretisation(fc.DEFAULT_N, "clamped")
+    disc = jr.planar_discretisation(fc.DEFAULT_N, "clamped")
     m = disc.size
     vary = fc.Vary("groups", 2)
     base = jnp.asarray(point.values)

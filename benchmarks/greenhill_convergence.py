@@ -32,9 +32,8 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 from common import benchmark_main  # noqa: E402
 
-import jaxrod  # noqa: E402,F401
+import jaxrod as jr  # noqa: E402
 from jaxrod.analysis.greenhill import pitchfork_coefficients  # noqa: E402
-from jaxrod.discretise.planar import planar_discretisation  # noqa: E402
 
 
 def _time(fn, *args, repeat=20):
@@ -58,7 +57,7 @@ def run(quick: bool) -> dict:
         beta_ref = airy.principal_eigenvalue(G, support)
         a2_ref = airy.pitchfork_coefficient(G, support)
         for n in degrees:
-            disc = planar_discretisation(n, support)
+            disc = jr.planar_discretisation(n, support)
             fn = jax.jit(pitchfork_coefficients)
             compile_s, warm_s = _time(fn, G, disc)
             beta, a2, _ = (float(v) for v in fn(G, disc))

@@ -38,11 +38,9 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 import shooting_reference as shooting  # noqa: E402
 
-import jaxrod  # noqa: E402,F401
+import jaxrod as jr  # noqa: E402
 from jaxrod import spectral  # noqa: E402
 from jaxrod.analysis import magnet  # noqa: E402
-from jaxrod.discretise.planar import planar_discretisation  # noqa: E402
-from jaxrod.scenes.dipole import tip_position  # noqa: E402
 
 D_EXP = 11.25 / 9.2
 CASES = {200: (2.2, 0.0236), 100: (4.4, 0.0472)}
@@ -66,11 +64,11 @@ def timed(fn, repeat: int):
 
 
 def shooting_folds(G, M, folds, n):
-    disc = planar_discretisation(n, "clamped")
+    disc = jr.planar_discretisation(n, "clamped")
     ref = []
     for f in folds:
         kappa = (spectral.differentiation_matrix(n) @ np.asarray(disc.full_values(f.theta)))[0]
-        X = np.asarray(tip_position(jnp.asarray(f.theta), disc))
+        X = np.asarray(jr.tip_position(jnp.asarray(f.theta), disc))
         ref.append(math.degrees(shooting.fold_alpha(
             G, M, D_EXP, (kappa - 0.02, kappa + 0.02), [math.radians(f.alpha_deg), *X],
             f.kind)))
@@ -81,11 +79,11 @@ def convergence(quick: bool) -> dict:
     degrees = [8, 12, 16] if quick else [4, 5, 6, 7, 8, 10, 12, 14, 16, 20, 24, 32]
     out = {}
     for E, (G, M) in CASES.items():
-        scene = magnet.make_scene(G, M, D_EXP)
-        ref = shooting_folds(G, M, magnet.locate_folds(scene, n=24).folds, 24)
+        scene = jr.magnet_scene(G, M, D_EXP)
+        ref = shooting_folds(G, M, jr.folds(scene, n=24).folds, 24)
         rows = []
         for n in degrees:
-            folds = magnet.locate_folds(scene, n=n).folds
+            folds = jr.folds(scene, n=n).folds
             errs = [abs(f.alpha_deg - r) for f, r in zip(folds, ref)] if len(folds) == 2 \
                 else [math.nan, math.nan]
             rows.append({"N": n, "err_lower_deg": errs[0], "err_upper_deg": errs[1]})
@@ -99,24 +97,24 @@ def convergence(quick: bool) -> dict:
 def timings(n: int, repeat: int) -> dict:
     out = {}
     for E, (G, M) in CASES.items():
-        scene = magnet.make_scene(G, M, D_EXP)
-        disc = planar_discretisation(n, "clamped")
+        scene = jr.magnet_scene(G, M, D_EXP)
+        disc = jr.planar_discretisation(n, "clamped")
         opts = magnet.default_options()
         capacity = opts.max_points
         opts0 = opts._replace(max_points=0)
         _, diag_first, diag_warm = timed(lambda: magnet._diagram(scene, disc, opts0, capacity),
                                          repeat)
-        branch = magnet.trace_diagram(scene, n)
+        branch = jr.diagram(scene, n)
         starts = [j for j in branch.fold_indices if branch.alpha[j] > 0]
         th0 = jnp.asarray(branch.theta[starts])
         al0 = jnp.asarray(branch.alpha[starts])
         (fp, _), pair_first, pair_warm = timed(
             lambda: magnet._refine_batch(th0, al0, scene, disc, 1e-13), repeat)
         pair = sorted(np.degrees(np.asarray(fp.lam)))
-        ref = shooting_folds(G, M, magnet.locate_folds(scene, n=n).folds, n)
+        ref = shooting_folds(G, M, jr.folds(scene, n=n).folds, n)
         err = max(abs(a - r) for a, r in zip(pair, ref))
-        _, _, e2e_warm = timed(lambda: magnet.locate_folds(scene, n=n), max(3, repeat // 10))
-        (fast, fast_ok), fast_first, fast_warm = timed(lambda: magnet.fold_pair(scene, n=12),
+        _, _, e2e_warm = timed(lambda: jr.folds(scene, n=n), max(3, repeat // 10))
+        (fast, fast_ok), fast_first, fast_warm = timed(lambda: jr.fold_pair(scene, n=12),
                                                        repeat)
         fast_err = max(abs(a - r) for a, r in zip(fast, ref)) if fast_ok else math.nan
         out[E] = {

@@ -26,14 +26,8 @@ import jax.numpy as jnp
 import numpy as np
 from common import benchmark_main, write_results
 
-import jaxrod  # noqa: F401
+import jaxrod as jr
 from jaxrod.analysis import magnet
-from jaxrod.discretise.director import director_discretisation
-from jaxrod.discretise.planar import planar_discretisation
-from jaxrod.scenes.dipole import tip_angle
-from jaxrod.scenes.three_d import DipoleMagnet3D, magnet_position
-from jaxrod.solvers.folds import moore_spence_solve
-from jaxrod.solvers.newton import newton
 
 D_EXP = 11.25 / 9.2
 CASES = {"200": (2.2, 0.0236), "100": (4.4, 0.0472)}
@@ -42,7 +36,7 @@ ALPHA, ALPHA_START = math.radians(35.0), math.radians(33.0)
 
 def energy_3d(x, alpha, args):
     scene, disc = args
-    return DipoleMagnet3D(scene.G, scene.M, scene.D, magnet_position(alpha)).energy(x, disc)
+    return jr.DipoleMagnet3D(scene.G, scene.M, scene.D, jr.magnet_position(alpha)).energy(x, disc)
 
 
 def _residual(energy):
@@ -51,22 +45,22 @@ def _residual(energy):
 
 @jax.jit
 def equilibrium_planar(x0, scene, disc):
-    return newton(_residual(magnet.alpha_energy), x0, (ALPHA, scene, disc), tol=1e-13)
+    return jr.newton(_residual(magnet.alpha_energy), x0, (ALPHA, scene, disc), tol=1e-13)
 
 
 @jax.jit
 def equilibrium_3d(x0, scene, disc):
-    return newton(_residual(energy_3d), x0, (ALPHA, scene, disc), tol=1e-13)
+    return jr.newton(_residual(energy_3d), x0, (ALPHA, scene, disc), tol=1e-13)
 
 
 @jax.jit
 def fold_planar(x0, a0, phi0, scene, disc):
-    return moore_spence_solve(magnet.alpha_energy, x0, a0, phi0, (scene, disc))
+    return jr.moore_spence_solve(magnet.alpha_energy, x0, a0, phi0, (scene, disc))
 
 
 @jax.jit
 def fold_3d(x0, a0, phi0, scene, disc):
-    return moore_spence_solve(energy_3d, x0, a0, phi0, (scene, disc))
+    return jr.moore_spence_solve(energy_3d, x0, a0, phi0, (scene, disc))
 
 
 def _timed(fn, *args, repeats=5):
@@ -90,8 +84,8 @@ def _tip_3d(x, ddisc):
 
 def _start_states(scene, n):
     """(theta at 33 deg, fold guess theta, alpha, null vector) on the planar grid of degree n."""
-    disc = planar_discretisation(n)
-    branch = magnet.trace_diagram(scene, n)
+    disc = jr.planar_discretisation(n)
+    branch = jr.diagram(scene, n)
     engaged = np.arange(len(branch))[branch.engaged]
     i = int(engaged[np.argmin(np.abs(branch.alpha[engaged] - ALPHA_START))])
     start = magnet._equilibrium(jnp.asarray(branch.theta[i]), ALPHA_START, scene, disc)
@@ -106,15 +100,15 @@ def run(quick: bool) -> dict:
     degrees = [8, 12] if quick else [6, 8, 10, 12, 16, 20, 24, 32]
     rows = []
     for e_gpa, (G, M) in CASES.items():
-        scene = magnet.make_scene(G, M, D_EXP)
-        ref_disc = planar_discretisation(48)
+        scene = jr.magnet_scene(G, M, D_EXP)
+        ref_disc = jr.planar_discretisation(48)
         x0, xf, af, phi = _start_states(scene, 48)
-        ref_tip = float(tip_angle(equilibrium_planar(jnp.asarray(x0), scene, ref_disc).x,
+        ref_tip = float(jr.tip_angle(equilibrium_planar(jnp.asarray(x0), scene, ref_disc).x,
                                   ref_disc))
         ref_fold = math.degrees(float(fold_planar(jnp.asarray(xf), af, jnp.asarray(phi), scene,
                                                   ref_disc).lam))
         for n in degrees:
-            disc, ddisc = planar_discretisation(n), director_discretisation(n)
+            disc, ddisc = jr.planar_discretisation(n), jr.director_discretisation(n)
             x0, xf, af, phi = (jnp.asarray(v) for v in _start_states(scene, n))
             eq_p, t_eq_p, c_eq_p = _timed(equilibrium_planar, x0, scene, disc)
             eq_3, t_eq_3, c_eq_3 = _timed(equilibrium_3d, ddisc.from_planar(x0), scene, ddisc)
@@ -125,7 +119,7 @@ def run(quick: bool) -> dict:
                 "E_GPa": int(e_gpa), "N": n, "unknowns_planar": disc.size,
                 "unknowns_3d": ddisc.size,
                 "equilibrium_error_planar_deg": abs(math.degrees(
-                    float(tip_angle(eq_p.x, disc)) - ref_tip)),
+                    float(jr.tip_angle(eq_p.x, disc)) - ref_tip)),
                 "equilibrium_error_3d_deg": abs(math.degrees(_tip_3d(eq_3.x, ddisc) - ref_tip)),
                 "equilibrium_warm_s": {"planar": t_eq_p, "3d": t_eq_3},
                 "equilibrium_compile_s": {"planar": c_eq_p, "3d": c_eq_3},

@@ -25,9 +25,8 @@ from pathlib import Path
 import jax
 import numpy as np
 
-import jaxrod  # noqa: F401
-from jaxrod.analysis.batch import fold_pairs, fold_pairs_program
-from jaxrod.analysis.magnet import fold_angles
+import jaxrod as jr
+from jaxrod.analysis.batch import fold_pairs_program
 
 HERE = Path(__file__).resolve().parent
 D_EXP = 11.25 / 9.2
@@ -69,7 +68,7 @@ def memory_per_set(K: int, dtype: str) -> float | None:
         return None
 
 
-_baseline = jax.jit(jax.vmap(lambda G, M, D: fold_angles(G, M, D, n=12)))
+_baseline = jax.jit(jax.vmap(lambda G, M, D: jr.fold_angles(G, M, D, n=12)))
 
 
 def run(ks, quick: bool) -> dict:
@@ -80,7 +79,7 @@ def run(ks, quick: bool) -> dict:
             G, M, D = parameter_sets(K)
             repeat = 3 if K <= 10_000 else 1
             (alphas, conv, iters), first, best = timed(
-                lambda: fold_pairs(G, M, D, dtype=dtype), repeat)
+                lambda: jr.fold_pairs(G, M, D, dtype=dtype), repeat)
             deg = np.degrees(np.asarray(alphas, dtype=np.float64))
             row = {"dtype": dtype, "K": K, "compile_plus_first_s": first, "warm_s": best,
                    "pairs_per_s": K / best, "converged_fraction": float(np.mean(conv)),
@@ -107,7 +106,7 @@ def run(ks, quick: bool) -> dict:
 
 def reference_for(K: int) -> np.ndarray:
     G, M, D = parameter_sets(K)
-    alphas, _, _ = fold_pairs(G, M, D)
+    alphas, _, _ = jr.fold_pairs(G, M, D)
     return np.degrees(np.asarray(alphas))
 
 

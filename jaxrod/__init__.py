@@ -1,5 +1,141 @@
-"""jaxrod: differentiable equilibria and stability of ferromagnetic Kirchhoff rods."""
+"""jaxrod: differentiable equilibria and stability of ferromagnetic Kirchhoff rods.
+
+The public API is this one flat namespace (``import jaxrod as jr``); the module tree under it
+(``jaxrod.analysis``, ``jaxrod.solvers``, ...) keeps working for deep imports but is not the
+interface. Names are loaded on first use, so ``import jaxrod`` stays cheap (the command line
+imports only what a command needs). Importing jaxrod switches JAX to float64.
+"""
+
+from __future__ import annotations
+
+import importlib
 
 import jax
 
 jax.config.update("jax_enable_x64", True)
+
+#: The public names, by section of the API reference: public name -> (module, attribute).
+#: The documentation's API pages are generated from this table, in this order.
+API: dict[str, dict[str, tuple[str, str]]] = {
+    "Inputs, units and valid ranges": {
+        "Material": ("jaxrod.params", "Material"),
+        "Rod": ("jaxrod.params", "Rod"),
+        "Magnet": ("jaxrod.params", "Magnet"),
+        "preset": ("jaxrod.params", "preset"),
+        "gravity_group": ("jaxrod.params", "gravity_group"),
+        "anisotropy_group": ("jaxrod.params", "anisotropy_group"),
+        "magnet_group": ("jaxrod.params", "magnet_group"),
+        "DesignPoint": ("jaxrod.analysis.fold_curves", "DesignPoint"),
+        "ValidRange": ("jaxrod.params", "ValidRange"),
+        "ParameterError": ("jaxrod.params", "ParameterError"),
+    },
+    "Scenes (energies)": {
+        "UniformField": ("jaxrod.scenes.uniform", "UniformField"),
+        "DipoleMagnet": ("jaxrod.scenes.dipole", "DipoleMagnet"),
+        "magnet_scene": ("jaxrod.analysis.magnet", "make_scene"),
+        "UniformField3D": ("jaxrod.scenes.three_d", "UniformField3D"),
+        "DipoleMagnet3D": ("jaxrod.scenes.three_d", "DipoleMagnet3D"),
+        "magnet_position": ("jaxrod.scenes.three_d", "magnet_position"),
+        "tip_position": ("jaxrod.scenes.dipole", "tip_position"),
+        "tip_angle": ("jaxrod.scenes.dipole", "tip_angle"),
+    },
+    "Discretisations": {
+        "chebyshev_grid": ("jaxrod.spectral", "chebyshev_grid"),
+        "planar_discretisation": ("jaxrod.discretise.planar", "planar_discretisation"),
+        "director_discretisation": ("jaxrod.discretise.director", "director_discretisation"),
+    },
+    "Derivatives": {
+        "EnergyModel": ("jaxrod.derivatives", "EnergyModel"),
+        "Structured": ("jaxrod.derivatives", "Structured"),
+        "Autodiff": ("jaxrod.derivatives", "Autodiff"),
+    },
+    "Solvers": {
+        "newton": ("jaxrod.solvers.newton", "newton"),
+        "descend": ("jaxrod.solvers.descent", "descend"),
+        "ContinuationOptions": ("jaxrod.solvers.continuation", "ContinuationOptions"),
+        "pseudo_arclength": ("jaxrod.solvers.continuation", "pseudo_arclength"),
+        "moore_spence_solve": ("jaxrod.solvers.folds", "moore_spence_solve"),
+        "differentiable_fold": ("jaxrod.solvers.folds", "differentiable_fold"),
+        "least_squares_run": ("jaxrod.solvers.least_squares", "least_squares_run"),
+    },
+    "Uniform field: the magnetic Greenhill problem": {
+        "greenhill": ("jaxrod.analysis.greenhill", "greenhill"),
+        "principal_eigenpair": ("jaxrod.analysis.greenhill", "principal_eigenpair"),
+        "stability_curve": ("jaxrod.analysis.greenhill", "stability_curve"),
+        "greenhill_load": ("jaxrod.analysis.greenhill", "greenhill_load"),
+        "critical_length": ("jaxrod.analysis.greenhill", "critical_length"),
+        "criticality_switch_load": ("jaxrod.analysis.greenhill", "criticality_switch_load"),
+        "buckled_branch": ("jaxrod.analysis.pitchfork", "buckled_branch"),
+    },
+    "Permanent magnet: branches, folds, hysteresis": {
+        "diagram": ("jaxrod.analysis.magnet", "trace_diagram"),
+        "folds": ("jaxrod.analysis.magnet", "locate_folds"),
+        "fold_pair": ("jaxrod.analysis.magnet", "fold_pair"),
+        "fold_angles": ("jaxrod.analysis.magnet", "fold_angles"),
+        "fold_pairs": ("jaxrod.analysis.batch", "fold_pairs"),
+        "sweep": ("jaxrod.analysis.magnet", "hysteresis_sweep"),
+        "square_root_law": ("jaxrod.analysis.magnet", "square_root_law"),
+        "conditioning_near_fold": ("jaxrod.analysis.conditioning", "conditioning_near_fold"),
+    },
+    "The reduced route": {
+        "reduction": ("jaxrod.analysis.reduction", "reduction"),
+        "reduced_folds": ("jaxrod.analysis.reduction", "reduced_folds"),
+        "second_variation_checks": ("jaxrod.analysis.reduction", "second_variation_checks"),
+        "certify": ("jaxrod.analysis.contraction", "certify"),
+    },
+    "Three dimensions": {
+        "out_of_plane": ("jaxrod.analysis.outofplane", "out_of_plane"),
+        "branch_verdict": ("jaxrod.analysis.outofplane", "branch_verdict"),
+        "tilted_track": ("jaxrod.analysis.magnet_track", "tilted_track"),
+        "track": ("jaxrod.analysis.magnet_track", "trace_track"),
+    },
+    "Fold curves, the cusp and design maps": {
+        "fold_curves": ("jaxrod.analysis.fold_curves", "fold_curves"),
+        "cusp": ("jaxrod.analysis.fold_curves", "find_cusp"),
+        "cusp_location": ("jaxrod.analysis.fold_curves", "cusp_location"),
+        "MapAxis": ("jaxrod.analysis.design_map", "MapAxis"),
+        "MapSpec": ("jaxrod.analysis.design_map", "MapSpec"),
+        "bistability_map": ("jaxrod.analysis.design_map", "run_map"),
+        "read_map": ("jaxrod.analysis.design_map", "read_store"),
+    },
+    "Calibration and inverse design": {
+        "fit": ("jaxrod.analysis.fit", "fit"),
+        "Prior": ("jaxrod.analysis.fit", "Prior"),
+        "profile": ("jaxrod.analysis.fit", "profile"),
+        "default_point": ("jaxrod.analysis.fit", "default_point"),
+        "fit_youngs_modulus": ("jaxrod.analysis.fit", "fit_youngs_modulus"),
+        "fit_batch": ("jaxrod.analysis.fit", "fit_batch"),
+        "design": ("jaxrod.analysis.design", "design"),
+    },
+    "Figures": {
+        "stability_diagram_figure": ("jaxrod.plotting", "stability_diagram_figure"),
+        "diagram_figure": ("jaxrod.plotting", "diagram_figure"),
+        "hysteresis_figure": ("jaxrod.plotting", "hysteresis_figure"),
+        "conditioning_figure": ("jaxrod.plotting", "conditioning_figure"),
+        "fold_curve_figure": ("jaxrod.plotting", "fold_curve_figure"),
+        "design_map_figure": ("jaxrod.plotting", "design_map_figure"),
+        "profile_figure": ("jaxrod.plotting", "profile_figure"),
+    },
+    "Long runs": {
+        "Interrupted": ("jaxrod.progress", "Interrupted"),
+        "enable_store": ("jaxrod.stored", "enable_store"),
+    },
+}
+
+_WHERE = {name: where for section in API.values() for name, where in section.items()}
+
+__all__ = list(_WHERE)
+
+
+def __getattr__(name: str):
+    """Load a public name on first use (PEP 562) and keep it."""
+    if name not in _WHERE:
+        raise AttributeError(f"module 'jaxrod' has no attribute {name!r}")
+    module, attribute = _WHERE[name]
+    value = getattr(importlib.import_module(module), attribute)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

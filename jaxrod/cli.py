@@ -401,10 +401,10 @@ def cmd_map(args) -> int:
                                    process_id=args.process_id)
     import numpy as np
 
-    from jaxrod.analysis.design_map import Axis, MapSpec, read_store, run_map
+    from jaxrod.analysis.design_map import MapAxis, MapSpec, read_store, run_map
 
     point, inputs = _design_point_from_args(args)
-    x, y = Axis.parse(args.x), Axis.parse(args.y)
+    x, y = MapAxis.parse(args.x), MapAxis.parse(args.y)
     point.index(x.name)
     point.index(y.name)
     if not 4 <= args.chunk <= 1000:
@@ -656,12 +656,15 @@ def cmd_certify(args) -> int:
 
 
 def cmd_branch(args) -> int:
-    from jaxrod.analysis.magnet import locate_folds
+    from jaxrod.analysis.magnet import figure_options, locate_folds, trace_diagram
     from jaxrod.plotting import diagram_figure
 
     scene, info = _magnet_scene_from_args(args)
     out_dir = _output_dir(args.out)
-    report = locate_folds(scene, n=args.n)
+    branch = trace_diagram(scene, args.n, figure_options())  # dense, for a smooth figure
+    if not branch.complete:  # a long branch filled the capacity: the default steps
+        branch = trace_diagram(scene, args.n)
+    report = locate_folds(scene, n=args.n, branch=branch)
     report.branch.write_csv(out_dir / "branch.csv")
     diagram_figure(report).savefig(out_dir / "branch.png", dpi=120)
     summary = info | report.as_dict() | {"points": len(report.branch)}

@@ -33,18 +33,30 @@ STANDARD_GRAVITY = 9.81  # m / s^2, the value the paper's tables use
 
 
 def gravity_group(youngs_modulus, density, gravity, diameter, length):
-    """G = 4 rho g L^3 / (E b^2), b = diameter / 2 (pure arithmetic: works on JAX arrays)."""
+    """G = 4 rho g L^3 / (E b^2), b = diameter / 2 (pure arithmetic: works on JAX arrays).
+
+    Paper: the gravity group of eq. ``nondimensional_master_energy`` (section
+    ``sec:model``).
+    """
     return 16.0 * density * gravity * length**3 / (youngs_modulus * diameter**2)
 
 
 def anisotropy_group(youngs_modulus, anisotropy_constant, diameter, length):
-    """A = 4 K_d L^2 / (E b^2)."""
+    """A = 4 K_d L^2 / (E b^2).
+
+    K_d = mu0 M_s^2 / 4 is the shape-anisotropy constant of a thin wire. Paper: the
+    stray-field group of eq. ``nondimensional_master_energy`` (section ``sec:model``).
+    """
     return 16.0 * anisotropy_constant * length**2 / (youngs_modulus * diameter**2)
 
 
 def magnet_group(youngs_modulus, saturation_magnetisation, remanence, diameter,
                  length, magnet_diameter):
-    """M = 4 mu0 M_r M_s a^3 / (3 E b^2 L), a = magnet_diameter / 2."""
+    """M = 4 mu0 M_r M_s a^3 / (3 E b^2 L), a = magnet_diameter / 2.
+
+    Paper: the Zeeman group of eq. ``permanent_magnet_energy`` (section
+    ``sec:magnetic_regimes``).
+    """
     return (2.0 * MU0 * saturation_magnetisation * remanence * magnet_diameter**3
             / (3.0 * youngs_modulus * diameter**2 * length))
 
@@ -91,6 +103,9 @@ class ValidRange:
 
     Upper bounds mark where a larger value cannot be computed in reasonable time or memory
     (or is no longer physical); ``why`` says which, and goes into the error message.
+
+    Paper: the bounds follow its hypotheses where it has them (D > 1: the magnet outside the
+    rod's reach, eq. ``permanent_magnet_energy``).
     """
 
     label: str  # how messages name the input: "G (gravity group)"
@@ -225,6 +240,9 @@ class Material:
 
     ``poisson_ratio`` (or an explicit ``shear_modulus``) only sets the twist ratio C, which
     does not enter any equilibrium or stability result (twist decouples, tau = 0).
+
+    Paper: the material data of Table ``tab:material_para``; they enter the energy (eq.
+    ``dimensional_master_energy``) only through the groups G, A, M.
     """
 
     name: str
@@ -253,7 +271,11 @@ class Material:
 
 @dataclasses.dataclass(frozen=True)
 class Magnet:
-    """A uniformly magnetised sphere moved on a circle of radius ``track_radius``."""
+    """A uniformly magnetised sphere moved on a circle of radius ``track_radius``.
+
+    Paper: the NdFeB sphere of Table ``tab:parameters_radial``; outside itself a point
+    dipole, so its field enters eq. ``permanent_magnet_energy`` as M Phi(X).
+    """
 
     diameter: float  # m
     remanence: float  # the magnet's remanent magnetisation (paper: M_s), A/m
@@ -267,7 +289,12 @@ class Magnet:
 
 @dataclasses.dataclass(frozen=True)
 class Rod:
-    """A circular wire of ``diameter`` and ``length`` (m) made of ``material``."""
+    """A circular wire of ``diameter`` and ``length`` (m) made of ``material``.
+
+    Paper: the wires of Tables ``tab:clamped``, ``tab:pinned`` and
+    ``tab:parameters_radial``; b = diameter / 2 and L = length in eq.
+    ``nondimensional_master_energy``.
+    """
 
     material: Material
     diameter: float

@@ -58,39 +58,129 @@ def stability_diagram_figure(report: dict | None = None, G_range=(1e-2, 1e3), po
     return fig
 
 
+def _groups_title(scene) -> str:
+    """'G = 2.2, M = 0.0236, D = 1.2229' for a magnet scene (empty without one)."""
+    if scene is None:
+        return ""
+    return f"G = {float(scene.G):.4g}, M = {float(scene.M):.4g}, D = {float(scene.D):.5g}"
+
+
+def _fold_points(report, y: str) -> list[tuple[float, float]]:
+    """(alpha in degrees, tip in degrees or q) of every refined fold and its mirror image."""
+    points = []
+    for f in report.folds:
+        v = f.tip_deg if y == "tip" else f.q
+        points += [(f.alpha_deg, v), (-f.alpha_deg, -v)]
+    return points
+
+
+def _branch_segments(report, y: str):
+    """The diagram cut where its stability changes, each piece closed by the refined fold
+    between them (so that both pieces end exactly at the Moore-Spence fold, with no gap)."""
+    b = report.branch
+    a = np.degrees(b.alpha)
+    v = np.degrees(b.tip) if y == "tip" else np.asarray(b.q)
+    stable = np.asarray(b.stable)
+    folds = _fold_points(report, y)
+    scale = np.array([max(np.ptp(a), 1e-12), max(np.ptp(v), 1e-12)])
+    cuts = np.nonzero(stable[1:] != stable[:-1])[0]
+    segments, start, joint = [], 0, None
+    for i in cuts:
+        mid = np.array([(a[i] + a[i + 1]) / 2, (v[i] + v[i + 1]) / 2])
+        near = min(folds, key=lambda p: np.linalg.norm((np.array(p) - mid) / scale),
+                   default=None)
+        end = tuple(mid) if near is None or np.linalg.norm(
+            (np.array(near) - mid) / scale) > 0.05 else near
+        xs, ys = list(a[start:i + 1]), list(v[start:i + 1])
+        if joint is not None:
+            xs, ys = [joint[0]] + xs, [joint[1]] + ys
+        segments.append((np.array(xs + [end[0]]), np.array(ys + [end[1]]), bool(stable[i])))
+        start, joint = i + 1, end
+    xs, ys = list(a[start:]), list(v[start:])
+    if joint is not None:
+        xs, ys = [joint[0]] + xs, [joint[1]] + ys
+    segments.append((np.array(xs), np.array(ys), bool(stable[-1])))
+    return segments
+
+
 def diagram_figure(report):
-    """Tip angle and q against alpha for a ``FoldReport`` (stable solid, unstable dashed)."""
+    """Tip angle and q against alpha for a ``FoldReport``: stable solid, unstable dashed,
+    the Moore-Spence folds circled (both signs of alpha), G, M, D in the title.
+
+    For smooth curves trace the diagram with ``jaxrod.analysis.magnet.figure_options``
+    (as ``jaxrod branch`` does); each piece ends exactly at its refined fold.
+    """
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.6))
     for ax, y in ((ax1, "tip"), (ax2, "q")):
-        report.branch.plot(ax, y=y)
-        for f in report.folds:
-            v = f.tip_deg if y == "tip" else f.q
-            for sign in (1, -1):
-                ax.plot(sign * f.alpha_deg, sign * v, "o", mfc="none", mec="k", ms=9)
+        for xs, ys, stable in _branch_segments(report, y):
+            ax.plot(xs, ys, "-" if stable else "--", color="C0" if stable else "C3", lw=1.6)
+        points = np.array(_fold_points(report, y)).reshape(-1, 2)
+        ax.plot(points[:, 0], points[:, 1], "o", mfc="none", mec="k", ms=9, ls="none")
+        ax.set_xlabel("magnet angle alpha (deg)")
+        ax.set_ylabel("tip angle (deg)" if y == "tip" else "q = int theta")
+        ax.set_xlim(-90, 90)
         ax.grid(alpha=0.3)
-    ax1.legend(fontsize=8)
-    ax1.set_title("planar equilibria (circles: Moore-Spence folds)")
+    handles = [ax1.plot([], [], "-", color="C0", label="stable")[0],
+               ax1.plot([], [], "--", color="C3", label="unstable")[0]]
+    if report.folds:
+        handles.append(ax1.plot([], [], "o", mfc="none", mec="k", ms=9, ls="none",
+                                label="fold (Moore-Spence)")[0])
+    ax1.legend(handles=handles, fontsize=8, loc="upper left")
+    title = "planar equilibria of the rod under the magnet"
+    width = report.hysteresis_width_deg
+    details = [t for t in (_groups_title(report.scene), f"N = {report.n}",
+                           f"hysteresis width {width:.4f} deg" if width is not None
+                           else "no pair of folds") if t]
+    fig.suptitle(f"{title}: " + ", ".join(details), fontsize=11)
     fig.tight_layout()
     return fig
 
 
-def hysteresis_figure(sweep: dict, report=None):
-    """Tip angle against magnet angle for both sweep directions, folds marked."""
+def hysteresis_figure(sweep: dict, report=None, scene=None):
+    """Tip angle against magnet angle for both sweep directions (the experiment's protocol),
+    snaps as dotted jumps, folds starred, G, M, D in the title.
+
+    Where there is no hysteresis both directions follow one curve: the counter-clockwise
+    sweep is then drawn dashed on top of the clockwise one, and the title says so.
+    """
+    scene = scene if scene is not None else getattr(report, "scene", None)
     fig, ax = plt.subplots(figsize=(7.5, 5))
-    for direction, colour, label in (("cw", "C1", "clockwise (alpha increasing)"),
-                                     ("ccw", "C0", "counter-clockwise (alpha decreasing)")):
-        sel = sweep["direction"] == direction
-        ax.plot(sweep["alpha_deg"][sel], sweep["tip_deg"][sel], ".-", color=colour, ms=3,
-                label=label)
-    if report is not None:
+    styles = {"cw": dict(color="C1", lw=3.0, ls="-", alpha=0.8, zorder=2),
+              "ccw": dict(color="C0", lw=1.4, ls="--", zorder=3)}
+    labels = {"cw": "clockwise sweep (alpha increasing)",
+              "ccw": "counter-clockwise sweep (alpha decreasing)"}
+    snapped = np.asarray(sweep["snapped"], bool)
+    for direction in ("cw", "ccw"):
+        sel = np.asarray(sweep["direction"]) == direction
+        if not sel.any():
+            continue
+        a, t, jump = sweep["alpha_deg"][sel], sweep["tip_deg"][sel], snapped[sel]
+        # break the line at each snap: the jump itself is drawn dotted
+        breaks = np.nonzero(jump)[0]
+        pieces = np.split(np.arange(a.size), breaks)
+        for k, piece in enumerate(pieces):
+            ax.plot(a[piece], t[piece], **styles[direction],
+                    label=labels[direction] if k == 0 else None)
+        for i in breaks:
+            if i > 0:
+                ax.plot([a[i - 1], a[i]], [t[i - 1], t[i]], ":", color="0.3", lw=1.2,
+                        zorder=1)
+    if breaks_drawn := snapped.any():
+        ax.plot([], [], ":", color="0.3", lw=1.2, label="snap (energy descent)")
+    if report is not None and report.folds:
         for f in report.folds:
             for sign in (1, -1):
-                ax.plot(sign * f.alpha_deg, sign * f.tip_deg, "k*", ms=11)
-        ax.plot([], [], "k*", label="folds (Moore-Spence)")
+                ax.plot(sign * f.alpha_deg, sign * f.tip_deg, "k*", ms=11, zorder=4)
+        ax.plot([], [], "k*", ms=11, ls="none", label="fold (Moore-Spence)")
     ax.set_xlabel("magnet angle alpha (deg)")
     ax.set_ylabel("tip angle (deg)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left")
+    width = None if report is None else report.hysteresis_width_deg
+    state = (f"hysteresis width {width:.4f} deg" if width is not None and breaks_drawn
+             else "no hysteresis: both directions on one curve")
+    ax.set_title(", ".join(t for t in ("hysteresis sweep", _groups_title(scene), state) if t),
+                 fontsize=10)
     fig.tight_layout()
     return fig
 

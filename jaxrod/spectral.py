@@ -182,7 +182,12 @@ def _grid_arrays(n: int):
 
 
 def chebyshev_grid(n: int) -> ChebyshevGrid:
-    """The ``ChebyshevGrid`` of degree n (n + 1 points), cached per n."""
+    """The ``ChebyshevGrid`` of degree n (n + 1 points), cached per n.
+
+    The discretisation behind every result (not in the paper, which uses a sine-series Ritz
+    method): nodes s_j = (1 - cos(pi j / n)) / 2, spectral differentiation, Clenshaw-Curtis
+    quadrature.
+    """
     nodes, diff, weights, cumint = _grid_arrays(_check_degree(n))
     return ChebyshevGrid(
         n=n,

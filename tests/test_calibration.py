@@ -11,6 +11,7 @@ import math
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from figure_checks import check_figure
 
 from jaxrod.analysis import calibration
 from jaxrod.analysis.design import design
@@ -19,6 +20,7 @@ from jaxrod.analysis.fold_curves import DesignPoint
 from jaxrod.analysis.magnet import locate_folds, make_scene
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import ParameterError
+from jaxrod.plotting import profile_figure
 
 
 def synthetic_angles(point: DesignPoint, offset: float = 0.0) -> np.ndarray:
@@ -101,7 +103,7 @@ def test_unidentifiable_combination_is_flagged_not_given_a_std():
     assert with_prior.converged and all(v is not None for v in with_prior.std.values())
 
 
-def test_profile_matches_laplace_near_the_optimum():
+def test_profile_matches_laplace_near_the_optimum(tmp_path):
     measured = synthetic_angles(default_point().replace("E", 210e9), 0.3) + np.array(
         [0.4, -0.3, 0.2, -0.5])
     cal = fit(measured, ("E", "offset"), sigma_deg=0.5)
@@ -113,6 +115,7 @@ def test_profile_matches_laplace_near_the_optimum():
     rise = np.array(prof["chi2"]) - cal.chi2
     laplace = np.array(prof["laplace_chi2"]) - cal.chi2
     assert np.allclose(rise[[0, 1, 3, 4]], laplace[[0, 1, 3, 4]], rtol=0.1)
+    check_figure(profile_figure([prof], cal), tmp_path, "profile")
 
 
 def test_coverage_on_a_small_batch():

@@ -18,7 +18,7 @@ from jaxrod.analysis.design_map import (
     INVALID_INPUT,
     NOT_BISTABLE,
     OK,
-    Axis,
+    MapAxis,
     MapSpec,
     read_store,
     run_map,
@@ -55,7 +55,7 @@ CLI = [sys.executable, "-m", "jaxrod.cli", "map", "--preset", "permanent-magnet"
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
     out = tmp_path_factory.mktemp("map") / "ref"
-    spec = MapSpec(_point(), Axis.parse(BISTABLE_X), Axis.parse(BISTABLE_Y), chunk=4)
+    spec = MapSpec(_point(), MapAxis.parse(BISTABLE_X), MapAxis.parse(BISTABLE_Y), chunk=4)
     run_map(spec, out, progress=False)
     return read_store(out)
 
@@ -101,7 +101,7 @@ def test_store_is_zarr_that_xarray_opens(reference, tmp_path):
     xr = pytest.importorskip("xarray")
     pytest.importorskip("zarr")
     out = tmp_path / "z"
-    spec = MapSpec(_point(), Axis.parse(BISTABLE_X), Axis.parse(BISTABLE_Y), chunk=4)
+    spec = MapSpec(_point(), MapAxis.parse(BISTABLE_X), MapAxis.parse(BISTABLE_Y), chunk=4)
     run_map(spec, out, progress=False)
     ds = xr.open_zarr(out, consolidated=False)
     np.testing.assert_array_equal(ds["width_deg"].values, reference["width_deg"])
@@ -109,9 +109,10 @@ def test_store_is_zarr_that_xarray_opens(reference, tmp_path):
 
 
 def test_a_map_for_other_arguments_is_refused(tmp_path):
-    spec = MapSpec(_point(), Axis.parse("E:150e9:250e9:3"), Axis.parse("length:0.09:0.095:3"))
+    spec = MapSpec(_point(), MapAxis.parse("E:150e9:250e9:3"), MapAxis.parse("length:0.09:0.095:3"))
     run_map(spec, tmp_path, progress=False)
-    other = MapSpec(_point(), Axis.parse("E:150e9:250e9:4"), Axis.parse("length:0.09:0.095:3"))
+    other = MapSpec(_point(), MapAxis.parse("E:150e9:250e9:4"),
+                    MapAxis.parse("length:0.09:0.095:3"))
     with pytest.raises(ParameterError, match="other arguments"):
         run_map(other, tmp_path, progress=False)
 
@@ -119,7 +120,7 @@ def test_a_map_for_other_arguments_is_refused(tmp_path):
 @pytest.mark.parametrize("text", ["E:1:2", "E:a:2:3", "E:1:1:3", "E:1:2:0", "E:inf:2:3"])
 def test_bad_axes(text):
     with pytest.raises(ParameterError):
-        Axis.parse(text)
+        MapAxis.parse(text)
 
 
 def test_resume_after_kill_loses_nothing(reference, tmp_path):

@@ -210,6 +210,9 @@ def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64"):
     ParameterError naming it. Matrix products run at full precision of ``dtype`` (GPUs
     otherwise multiply float32 matrices in TF32, which costs float32 three digits and
     Newton its convergence).
+
+    Paper: the two folds of Proposition ``thm:planar_fold`` (Moore-Spence: grad E = 0, H phi
+    = 0, l . phi = 1), one pair per row.
     """
     if dtype not in DTYPES:
         raise ParameterError(f"dtype must be one of {DTYPES}, got {dtype!r}")

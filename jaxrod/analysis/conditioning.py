@@ -63,6 +63,10 @@ def conditioning_near_fold(scene: DipoleMagnet, fold: ReducedFold, n: int = 16,
     """Condition numbers at branch points q = q* + side * dq for dq in ``offsets``.
 
     Returns arrays keyed ``distance_deg`` (|alpha - alpha*|), ``dq`` and one per system.
+
+    Systems compared: the Newton Hessian H (singular at the fold), the bordered continuation
+    Jacobian and the Moore-Spence Jacobian. Paper: the folds of Proposition
+    ``thm:planar_fold``.
     """
     offsets = np.logspace(-7, -1, 13) if offsets is None else np.asarray(offsets, float)
     disc = planar_discretisation(n, "clamped")

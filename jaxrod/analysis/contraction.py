@@ -147,6 +147,9 @@ def certify(scene: DipoleMagnet, n: int = 16) -> dict:
     The branch is the full-space continuation (``trace_diagram`` with steps <= 0.01), so the
     check covers the branch even where the contraction argument does not; a failure is
     located between the last certified point and the first failing one.
+
+    Paper: Proposition ``thm:mode_accuracy`` (hypotheses eq. ``mode_accuracy_hypotheses``;
+    constants eqs. ``eta_qalpha_def`` to ``K_qalpha_def``).
     """
     from jaxrod.analysis.magnet import default_options, trace_diagram
     from jaxrod.analysis.reduction import reduced_folds, reduction

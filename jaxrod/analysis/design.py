@@ -139,6 +139,9 @@ def design(point: DesignPoint, capture_deg: float, release_deg: float, vary,
     or physical); ``vary``: the inputs to solve for (names of ``point``); ``bounds``: name
     -> (lo, hi) (default ``default_bounds``). Raises ParameterError when no bistable
     design within the bounds reaches the targets (the closest found is in the message).
+
+    Targets: the lower fold at ``capture_deg`` and the upper at ``release_deg`` (Proposition
+    ``thm:planar_fold``; the design rule of section ``s.discussion`` of the paper).
     """
     capture, release = check_targets(capture_deg, release_deg)
     vary = _check_names(vary, point.names, "vary")

@@ -75,7 +75,7 @@ MAP_N = 12
 
 
 @dataclasses.dataclass(frozen=True)
-class Axis:
+class MapAxis:
     """One grid axis: ``count`` values of the input ``name`` from ``start`` to ``stop``."""
 
     name: str
@@ -84,7 +84,7 @@ class Axis:
     count: int
 
     @classmethod
-    def parse(cls, text: str) -> Axis:
+    def parse(cls, text: str) -> MapAxis:
         """``name:start:stop:count`` (as on the command line)."""
         parts = text.rsplit(":", 3)
         if len(parts) != 4:
@@ -106,7 +106,11 @@ class Axis:
         return np.linspace(self.start, self.stop, self.count)
 
 
-def _grid_values(point: DesignPoint, x: Axis, y: Axis) -> np.ndarray:
+#: The earlier name of ``MapAxis`` (deep imports keep working).
+Axis = MapAxis
+
+
+def _grid_values(point: DesignPoint, x: MapAxis, y: MapAxis) -> np.ndarray:
     """(y.count, x.count, len(point.values)): every grid point's inputs."""
     ix, iy = point.index(x.name), point.index(y.name)
     if ix == iy:
@@ -283,8 +287,8 @@ class MapSpec:
     """What a map computes: the design point, both axes, the chunk size and N."""
 
     point: DesignPoint
-    x: Axis
-    y: Axis
+    x: MapAxis
+    y: MapAxis
     chunk: int = 50
     n: int = MAP_N
 
@@ -390,7 +394,11 @@ def read_store(out: Path) -> dict[str, np.ndarray]:
 
 def run_map(spec: MapSpec, out: Path, progress: bool = True, devices=None) -> dict:
     """Compute the map into the store ``out`` (resuming a partial one), this process's
-    chunks only when ``jax.distributed`` runs several processes. Returns counts."""
+    chunks only when ``jax.distributed`` runs several processes. Returns counts.
+
+    Paper: the width of eq. ``intro-hysteresis`` over two inputs; the design rule of section
+    ``s.discussion``.
+    """
     out = Path(out)
     values = _grid_values(spec.point, spec.x, spec.y)
     _init_store(out, spec)

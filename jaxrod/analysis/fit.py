@@ -197,6 +197,10 @@ def fit_youngs_modulus(measured, sigma_deg: float = 1.0, fit_offset: bool = Fals
 
     ``measured`` holds the four angles in ``ANGLE_NAMES`` order; nan marks one that was not
     measured. With the offset free, at least two angles are needed.
+
+    Model: the four angles (capture and release, both directions) from the folds of
+    Proposition ``thm:planar_fold`` plus the offset. Paper: Corollary
+    ``cor:permanent_physical_parameters``.
     """
     measured, mask = _parse(measured, sigma_deg)
     if fit_offset and mask.sum() < 2:
@@ -220,6 +224,8 @@ def fit_batch(measured, sigma_deg: float = 1.0, fit_offset: bool = False,
     (benchmarks/fit_performance.py). ``"auto"`` picks vmap on a GPU and loop otherwise.
     ``progress`` shows a progress bar on a terminal (loop only); Ctrl-C raises
     ``jaxrod.progress.Interrupted`` with the fits done so far as ``partial``.
+
+    Paper: Corollary ``cor:permanent_physical_parameters`` (one fit per row).
     """
     rows = []
     for i, m in enumerate(np.atleast_2d(measured)):
@@ -558,7 +564,11 @@ def profile(measured, name: str, free=("E", OFFSET), point: DesignPoint | None =
             count: int = 15, span: float = 3.0, fitted: Calibration | None = None) -> dict:
     """The profile likelihood of one free parameter: chi^2 minimised over the others at each
     of ``values`` (default: ``count`` values within ``span`` standard deviations of the
-    estimate), with the Laplace (quadratic) approximation beside it."""
+    estimate), with the Laplace (quadratic) approximation beside it.
+
+    Paper: the fit of Corollary ``cor:permanent_physical_parameters`` (Young's modulus from
+    the switching angles).
+    """
     free = _check_names(free, FREE_NAMES, "free")
     if name not in free:
         raise ParameterError(f"profile: {name!r} is not a free parameter ({', '.join(free)})")

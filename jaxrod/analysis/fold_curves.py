@@ -76,6 +76,9 @@ class DesignPoint:
 
     ``magnet_radius`` (a / L, groups only) makes the clearance check refuse magnets the rod
     could touch; physical points take it from the magnet diameter.
+
+    Paper: the inputs of eq. ``permanent_magnet_energy`` (groups) or of Table
+    ``tab:parameters_radial`` (physical).
     """
 
     kind: str  # "groups" or "physical"
@@ -399,7 +402,12 @@ def _curve_from(run, observed, i, start, v0) -> tuple[FoldCurve, int | None]:
 
 def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) -> FoldCurves:
     """Both fold curves of ``point`` as the input ``vary`` goes to ``to``, the cusp where they
-    meet (if it lies in the range) and where a fold leaves alpha in (0, 90] degrees."""
+    meet (if it lies in the range) and where a fold leaves alpha in (0, 90] degrees.
+
+    Along a curve: grad E = 0, H phi = 0, l . phi = 1 in (theta, phi, alpha, u) with
+    pseudo-arclength in (alpha, u). Paper: the folds of Proposition ``thm:planar_fold``
+    followed in a second parameter; the design rule of section ``s.discussion``.
+    """
     i = point.index(vary)
     to = check_target(point, vary, to)
     v0 = point.values[i]
@@ -493,7 +501,11 @@ def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> CurvePoint:
     ways (within the valid range and a factor 20 of the start) to the nearest sign change of
     d2F/dq2, refined by Newton on the cusp system. Raises ``ParameterError`` if there is no
     fold to start from, and returns ``converged=False`` (with kind "none") if no cusp is
-    found in the search range."""
+    found in the search range.
+
+    The cusp solves the fold system with d2F/dq2 = 0 (the non-degeneracy condition of
+    Proposition ``thm:planar_fold`` in the paper fails there).
+    """
     i = point.index(vary)
     v0 = point.values[i]
     lo, hi = valid_range(point, vary)
@@ -521,7 +533,11 @@ def cusp_location(point: DesignPoint, vary: str, cusp: CurvePoint, n: int = DEFA
     ``f(values) -> (value of vary, alpha in radians, Newton stats)``, by implicit
     differentiation of the cusp system about the converged ``cusp`` found from ``point``
     (``jaxrod.solvers.fold_curve.differentiable_cusp``). Compose it with ``jax.jacfwd`` for
-    the cusp's sensitivity to the other inputs (the entry of ``vary`` itself has none)."""
+    the cusp's sensitivity to the other inputs (the entry of ``vary`` itself has none).
+
+    Paper: the cusp ends the hysteresis of eq. ``intro-hysteresis``; d2F/dq2 = 0 as in
+    ``find_cusp``.
+    """
     i = point.index(vary)
     disc = planar_discretisation(n, "clamped")
     vary_map = Vary(point.kind, i)

@@ -87,7 +87,10 @@ def _smallest_generalised_eigenpair(H, M):
 def principal_eigenpair(G, disc: PlanarDiscretisation):
     """(beta0(G), u) for the support of ``disc``: int u^2 = 1 and int u > 0 (u > 0 inside).
 
-    Pure JAX: differentiable in G (and vmappable over G).
+    beta0(G) is the smallest eigenvalue of -u'' - G (1 - s) u = beta u with the support's
+    boundary conditions, the discrete form of the second variation of the straight rod
+    without field. Pure JAX: differentiable in G (and vmappable over G). Paper: Proposition
+    ``thm:uniform_straight_stability`` (eq. ``uniform_straight_second_variation``).
     """
     H = _straight_hessian(G, disc)
     _, u = _smallest_generalised_eigenpair(H, disc.mass_matrix())
@@ -116,7 +119,11 @@ def _greenhill_load(disc: PlanarDiscretisation):
 
 
 def greenhill_load(n: int = 40) -> float:
-    """G_crit: smallest G with beta0^cl(G) = 0, from int u'^2 = G int (1 - s) u^2."""
+    """G_crit: smallest G with beta0^cl(G) = 0, from int u'^2 = G int (1 - s) u^2.
+
+    Paper: Lemma ``lem:greenhill`` (the Airy characteristic equation
+    ``clamped_Airy_characteristic``; G_crit = 7.8373...).
+    """
     return float(_greenhill_load(planar_discretisation(n, "clamped")))
 
 
@@ -192,6 +199,13 @@ def greenhill(G: float, support: str = "clamped", A: float | None = None,
       support: "clamped" or "pinned".
       A: anisotropy group (optional); the rod is stable iff A + beta0 > 0.
       n: Chebyshev degree (default ``default_degree(G)``).
+
+    The second variation of the straight rod is int [u'^2 + (A - G (1 - s)) u^2] ds;
+    beta0(G) is the principal eigenvalue of -u'' - G (1 - s) u, so the rod is stable iff A >
+    A_crit = -beta0(G). Paper: Proposition ``thm:uniform_straight_stability`` (eq.
+    ``uniform_straight_second_variation``), Lemma ``lem:greenhill`` (G_crit), Proposition
+    ``thm:uniform_bifurcation_criticality`` (A2, eq.
+    ``uniform_bifurcation_coefficient_simplified``).
     """
     G = check("G", G)
     check_support(support)
@@ -212,7 +226,11 @@ _pitchfork_jit = jax.jit(pitchfork_coefficients)
 
 
 def stability_curve(G_values, support: str = "clamped", n: int | None = None):
-    """(A_crit, A2) at many G at once (one compiled, vmapped program for a fixed degree n)."""
+    """(A_crit, A2) at many G at once (one compiled, vmapped program for a fixed degree n).
+
+    Paper: the curves of Figures ``fig:clamped1`` and ``fig:pinned``, bounded by Proposition
+    ``thm:uniform_eigenvalue_bounds``.
+    """
     G_values = jnp.asarray(G_values, dtype=jnp.float64)
     n = n or default_degree(float(jnp.max(G_values)))
     disc = planar_discretisation(n, support)
@@ -276,6 +294,8 @@ def critical_length(rod: Rod, support: str = "clamped", field_on: bool = True,
     L_c = (G_crit E b^2 / (4 rho g))^(1/3). A pinned rod without field is unstable at every
     length (returns 0.0). With the field on, G ~ L^3 and A ~ L^2 and the root is found by
     Newton in log L, started from the stabilisation length K_d / (rho g) (where A = G).
+
+    Paper: Theorems ``thm:uniform_physical_clamped`` and ``thm:uniform_physical_pinned``.
     """
     check_support(support)
     g_per_l3 = rod.G / rod.length**3

@@ -45,7 +45,11 @@ def alpha_energy(theta, alpha, args):
 
 
 def make_scene(G: float, M: float, D: float, magnet_radius: float | None = None) -> DipoleMagnet:
-    """Validated scene. ``magnet_radius`` (a/L) refuses magnets the rod could touch."""
+    """Validated scene. ``magnet_radius`` (a/L) refuses magnets the rod could touch.
+
+    The scene is ``DipoleMagnet(G, M, D, alpha=0)``, energy E_perm of eq.
+    ``permanent_magnet_energy_reduced`` (paper); D > 1 + a/L keeps the magnet off the rod.
+    """
     check("G-magnet", G)
     check("M", M)
     check_track_clearance(D, 0.0 if magnet_radius is None else magnet_radius)
@@ -63,8 +67,20 @@ _observables = jax.jit(_observables_of)
 
 
 def default_options(max_points: int = 400) -> ContinuationOptions:
+    """Step control of the diagram: steps of at most 0.1 in arclength, alpha in [-90, 90]."""
     return ContinuationOptions(ds=0.05, ds_min=1e-8, ds_max=0.1, lam_min=-math.pi / 2,
                                lam_max=math.pi / 2, tol=1e-12, max_points=max_points)
+
+
+#: The largest step of a diagram drawn for a figure: about five times denser than the
+#: default, so that the curves are smooth through the folds. ``ds_max`` is traced, so the
+#: dense diagram reuses the compiled program.
+FIGURE_DS_MAX = 0.02
+
+
+def figure_options() -> ContinuationOptions:
+    """``default_options`` with steps of at most ``FIGURE_DS_MAX`` (for plotting)."""
+    return default_options()._replace(ds_max=FIGURE_DS_MAX)
 
 
 def _diagram_program(scene: DipoleMagnet, disc: PlanarDiscretisation,
@@ -109,6 +125,10 @@ def trace_diagram(scene: DipoleMagnet, n: int = DEFAULT_N,
     """The whole planar diagram for alpha in [-90, 90] degrees through the straight rod.
 
     One compiled program runs both directions from (theta, alpha) = (0, 0) (vmapped).
+
+    Equilibria solve grad E_perm(theta; alpha) = 0, the discrete planar Euler-Lagrange
+    equation. Paper: Lemma ``thm:planar_equilibria`` (eq. ``planar_EL``), Corollary
+    ``cor:planar_branch``.
     """
     disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     options = options or default_options()
@@ -219,6 +239,9 @@ def fold_angles(G, M, D, n: int = 12, tol: float = 1e-13):
     valid ranges (``jaxrod.params.RANGES``). Concrete inputs are validated (ParameterError);
     traced ones are checked inside the program. Compiled once per (n, tol): later calls
     with new values, and ``jax.grad`` of it, reuse the program.
+
+    Each fold solves grad E = 0, H phi = 0, l . phi = 1 in (theta, phi, alpha). Paper:
+    Proposition ``thm:planar_fold``.
     """
     if not any(isinstance(v, jax.core.Tracer) for v in (G, M, D)):
         check("G-magnet", G)
@@ -295,6 +318,7 @@ class FoldReport:
     branch: Branch
     n: int
     problems: tuple[str, ...] = ()
+    scene: DipoleMagnet | None = None
 
     @property
     def converged(self) -> bool:
@@ -323,6 +347,10 @@ def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None 
     turns back; release in a sweep of increasing alpha) and ``lower`` (the disengaged
     branch turns back; capture). Folds at alpha < 0 are their mirror images. With no
     fold (no bistability) the list is empty.
+
+    A fold solves grad E = 0, H phi = 0, l . phi = 1 (Moore-Spence) with dF/dalpha != 0 and
+    d2F/dq2 != 0. Paper: Proposition ``thm:planar_fold``, Corollary ``cor:tip_angle_fold``;
+    the numbers of Corollary ``cor:permanent_physical_parameters``.
     """
     disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     given = branch is not None
@@ -365,7 +393,7 @@ def _folds_on(scene, disc, branch: Branch, n: int, tol) -> FoldReport:
         problems.append(f"no fold detected, but the Hessian's smallest eigenvalue comes within "
                         f"{NEAR_SINGULAR:g} of zero: two folds may hide within one continuation "
                         "step (parameters near the cusp)")
-    return FoldReport(folds=folds, branch=branch, n=n, problems=tuple(problems))
+    return FoldReport(folds=folds, branch=branch, n=n, problems=tuple(problems), scene=scene)
 
 
 # --- quasi-static hysteresis -----------------------------------------------------------------
@@ -411,6 +439,9 @@ def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: flo
     ``progress(done, total)`` is called after each. Ctrl-C raises
     ``jaxrod.progress.Interrupted`` whose ``partial`` is this dict for the positions done
     (``complete`` False, ``reason`` saying where).
+
+    Paper: the loop of eq. ``intro-hysteresis`` and Theorem ``thm:permanent_physical``
+    (capture at the lower fold, release at the upper).
     """
     alpha_max_deg = check("alpha-max", alpha_max_deg)
     step_deg = check("step", step_deg)
@@ -464,6 +495,8 @@ def square_root_law(scene: DipoleMagnet, fold: Fold, n: int = DEFAULT_N,
     Equilibria at alpha* - sign(c) delta (the side where they exist) are found by Newton
     from the fold state shifted along the null vector by the normal form,
     q - q* = +-sqrt(delta / |c|); the exponent is the least-squares slope in log-log.
+
+    Paper: Corollary ``cor:tip_angle_fold`` (tip - tip* ~ sqrt(alpha - alpha*) at a fold).
     """
     disc = planar_discretisation(n, "clamped")
     a_star = math.radians(fold.alpha_deg)

@@ -55,7 +55,11 @@ class GreatCircleTrack:
 
 def tilted_track(alpha0_deg: float, tilt_deg: float) -> GreatCircleTrack:
     """The great circle through the in-plane position at polar angle alpha0, leaving the
-    plane at angle ``tilt`` to the meridian (0: the planar track; 90: heading along e2)."""
+    plane at angle ``tilt`` to the meridian (0: the planar track; 90: heading along e2).
+
+    Paper: beyond its planar setting; the magnet stays on the sphere of radius D of eq.
+    ``permanent_magnet_energy``.
+    """
     a = math.radians(check("alpha0", alpha0_deg))
     b = math.radians(check("tilt", tilt_deg))
     meridian = jnp.array([math.cos(a), 0.0, -math.sin(a)])
@@ -163,7 +167,12 @@ def trace_track(scene: DipoleMagnet, alpha0_deg: float = 20.0, tilt_deg: float =
                 n: int = 16, t_max_deg: float = 60.0, max_points: int = 300) -> TrackBranch:
     """Follow the rod in 3D as the magnet moves along ``tilted_track(alpha0, tilt)`` from
     t = 0 (the local minimum reached from the straight rod) to t_max, through folds; each
-    fold is refined."""
+    fold is refined.
+
+    Energy: eq. ``permanent_magnet_energy`` of the paper with the magnet at D p(t) on the
+    track; out-of-plane stability as in Proposition
+    ``thm:conditional_out_of_plane_stability``.
+    """
     check("t-max", t_max_deg)
     track = tilted_track(alpha0_deg, tilt_deg)
     disc = director_discretisation(check_degree(n, "N-magnet"))

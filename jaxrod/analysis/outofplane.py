@@ -43,7 +43,13 @@ def _sinc(x):
 
 
 def out_of_plane(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation) -> dict:
-    """The checks at the planar equilibrium ``theta`` (free nodal values) at angle alpha."""
+    """The checks at the planar equilibrium ``theta`` (free nodal values) at angle alpha.
+
+    The full second variation splits into the planar form and Q_perp[v2] = int [v2'^2 +
+    lambda_theta v2^2] + nonlocal terms. Paper: Lemma ``prop:second_variation_splitting``
+    (eq. ``Qperp_def``), Proposition ``thm:conditional_out_of_plane_stability`` (eq.
+    ``out_of_plane_sign_conditions``).
+    """
     ddisc = director_discretisation(disc.n, disc.support)
     scene3 = DipoleMagnet3D(scene.G, scene.M, scene.D, magnet_position(alpha))
     H = jax.hessian(scene3.energy)(ddisc.from_planar(theta), ddisc)

@@ -121,6 +121,9 @@ def buckled_branch(G: float, support: str = "clamped", n: int = 48, points: int 
     director discretisation. The amplitudes r are spaced evenly up to
     r_max = max_angle / max|u|, so that the tilt stays below max_angle roughly whatever the
     shape of the critical mode.
+
+    Paper: the bifurcating branch of eq. ``uniform_bifurcation_branch``, A = A_crit + A2 r^2
+    + O(r^3) (Proposition ``thm:uniform_bifurcation_criticality``).
     """
     planar = planar_discretisation(n, support)
     _, u = principal_eigenpair(G, planar)

@@ -126,7 +126,11 @@ class Reduction:
 
 
 def reduction(scene: DipoleMagnet, disc: PlanarDiscretisation) -> Reduction:
-    """Build the ``Reduction`` of a scene (traceable; differentiable in G, M, D)."""
+    """Build the ``Reduction`` of a scene (traceable; differentiable in G, M, D).
+
+    theta = q psi + w, int psi = 1, w mean-zero. Paper: Lemma ``lem:mode_decomposition``
+    (eq. ``theta_mode_decomposition``), Lemma ``lem:mode_properties`` (eq. ``psi_BVP``).
+    """
     psi, lam, norm2 = normalised_mode(scene.G, scene.M, scene.D, disc)
     return Reduction(psi, mean_zero_basis(disc), lam, norm2, poincare_mean_zero(disc))
 
@@ -348,7 +352,11 @@ def check_reducible(scene: DipoleMagnet) -> None:
 def reduced_folds(scene: DipoleMagnet, n: int = 16, tol: float = 1e-13) -> list[ReducedFold]:
     """The folds with alpha > 0 by the reduced route (lower first; [] if the one-mode diagram
     has no pair of folds). Independent of the full-space continuation and Moore-Spence.
-    Raises ``ParameterError`` when 2M/delta^3 <= G (no mode decomposition)."""
+    Raises ``ParameterError`` when 2M/delta^3 <= G (no mode decomposition).
+
+    A fold of the reduced equation F(q, alpha) = 0 solves F = dF/dq = 0. Paper: Proposition
+    ``prop:scalar_reduction`` (eq. ``reduced_equation``), Proposition ``thm:planar_fold``.
+    """
     check_reducible(scene)
     disc = planar_discretisation(n, "clamped")
     found, one, full, derivs, tip, inner, theta, _ = _reduced_fold_pair_jit(scene, disc, tol)
@@ -376,13 +384,13 @@ def second_variation_checks(q, alpha, red: Reduction, scene: DipoleMagnet,
     """Numerical checks of the paper's Lemma "Planar stability criterion" at (q, alpha).
 
     Q_pl is the Hessian H of the discrete energy at theta = q psi + w(q, alpha) and
-    xi = psi + d_q w. Returns
+    xi = psi + d_q w. Returns a dict:
 
-      coercivity:  min over v in Y of Q_pl(v, v) / ||v||_Y^2 (to compare with 1 - K),
-      dF_dq, Q_xi_xi:  dF/dq and Q_pl(xi, xi) (equal by eq. partialqF_second_variation),
-      xi_orthogonality:  max_j |Q_pl(xi, z_j)| / ||z_j||_Y over the basis z_j of Y
-                         (zero by eq. xi_Y_orthogonality),
-      xi_mean:  int xi (= 1).
+    - coercivity: min over v in Y of Q_pl(v, v) / ||v||_Y^2 (to compare with 1 - K),
+    - dF_dq, Q_xi_xi: dF/dq and Q_pl(xi, xi) (equal by eq. partialqF_second_variation),
+    - xi_orthogonality: max_j |Q_pl(xi, z_j)| / ||z_j||_Y over the basis z_j of Y (zero by
+      eq. xi_Y_orthogonality),
+    - xi_mean: int xi (= 1).
     """
     theta, _ = reduced_state(q, alpha, red, scene, disc)
     H = ALPHA_MODEL.hessian(theta, alpha, (scene, disc))

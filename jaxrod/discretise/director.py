@@ -133,5 +133,9 @@ def director_jet(a):
 
 
 def director_discretisation(n: int, support: str = "clamped") -> DirectorDiscretisation:
-    """Degree-n discretisation of d3 for a support ("clamped": d3(0) = e3; "pinned": free)."""
+    """Degree-n discretisation of d3 for a support ("clamped": d3(0) = e3; "pinned": free).
+
+    Paper: the director d3 on the unit sphere of eq. ``nondimensional_master_energy``
+    (section ``sec:model``), clamped as in eq. ``clamped_bc``.
+    """
     return DirectorDiscretisation(planar_discretisation(n, support))

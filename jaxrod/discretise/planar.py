@@ -128,6 +128,9 @@ def planar_discretisation(n: int, support: str = "clamped",
     """The planar discretisation of degree ``n`` (n >= 4) for a ``support``.
 
     ``quad_degree`` (default 2n + 2) is the degree of the fine Clenshaw-Curtis grid.
+
+    Paper: the planar ansatz d3 = sin(theta) e1 + cos(theta) e3 with the supports of eq.
+    ``clamped_bc`` (clamped: theta(0) = 0).
     """
     n = check_degree(n)
     check_support(support)

@@ -39,13 +39,20 @@ def dipole_potential(x, p, D):
 
 
 def tip_position(theta: jax.Array, disc: PlanarDiscretisation) -> jax.Array:
-    """X = int_0^1 (sin theta, cos theta) ds as the (e1, e3) pair."""
+    """X = int_0^1 (sin theta, cos theta) ds as the (e1, e3) pair.
+
+    Paper: the tip X = int d3 at which the dipole potential is evaluated, eq.
+    ``permanent_magnet_energy``.
+    """
     th, _ = disc.at_quadrature(theta)
     return jnp.stack([disc.integrate(jnp.sin(th)), disc.integrate(jnp.cos(th))])
 
 
 def tip_angle(theta: jax.Array, disc: PlanarDiscretisation) -> jax.Array:
-    """Polar angle of the tip from the vertical, atan(X1 / X3) (radians)."""
+    """Polar angle of the tip from the vertical, atan(X1 / X3) (radians).
+
+    Paper: the experiment's tip displacement angle, Corollary ``cor:tip_angle_fold``.
+    """
     X = tip_position(theta, disc)
     return jnp.arctan2(X[0], X[1])
 
@@ -58,6 +65,11 @@ class DipoleMagnet:
     ``alpha`` is the magnet angle in radians. Validate user input with
     ``jaxrod.params.check_groups`` before building a scene (this object is also built
     inside traced code, where no Python check can run).
+
+    Energy (planar): E_perm[theta] = 1/2 int theta'^2 + G int (1 - s) cos(theta) + M
+    Phi_alpha(X), X = int_0^1 (sin theta, cos theta) ds, Phi_alpha(x) = p . (x - D p) /
+    norm(x - D p)^3, p = (sin alpha, cos alpha). Paper: eq.
+    ``permanent_magnet_energy_reduced``.
     """
 
     G: jax.Array | float

@@ -21,7 +21,10 @@ from jaxrod.discretise.director import DirectorDiscretisation, director, directo
 
 def magnet_position(alpha, beta=0.0):
     """p = (sin a cos b, sin a sin b, cos a): polar angle alpha from e3, azimuth beta from e1
-    (beta = 0 is the experiment's plane)."""
+    (beta = 0 is the experiment's plane).
+
+    Paper: the magnet's position on the sphere of radius D, eq. ``permanent_magnet_energy``.
+    """
     return jnp.stack([jnp.sin(alpha) * jnp.cos(beta), jnp.sin(alpha) * jnp.sin(beta),
                       jnp.cos(alpha)])
 
@@ -36,6 +39,12 @@ def _common(x, disc: DirectorDiscretisation, G):
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
 class UniformField3D:
+    """Scene parameters (G, A) of the uniform field on the director discretisation (traced).
+
+    Energy: E = 1/2 int norm(d3')^2 + G int (1 - s) d3 . e3 + A/2 int [1 - (d3 . e3)^2].
+    Paper: eq. ``uniform_field_energy``.
+    """
+
     G: jax.Array | float
     A: jax.Array | float
 
@@ -55,7 +64,11 @@ class UniformField3D:
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
 class DipoleMagnet3D:
-    """(G, M, D) and the magnet direction p (a unit 3-vector; see ``magnet_position``)."""
+    """(G, M, D) and the magnet direction p (a unit 3-vector; see ``magnet_position``).
+
+    Energy: E = 1/2 int norm(d3')^2 + G int (1 - s) d3 . e3 + M Phi_p(X), X = int d3. Paper:
+    eq. ``permanent_magnet_energy``.
+    """
 
     G: jax.Array | float
     M: jax.Array | float

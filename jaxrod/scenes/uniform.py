@@ -24,7 +24,11 @@ from jaxrod.scenes.terms import anisotropy_energy, bending_energy, gravity_energ
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
 class UniformField:
-    """Scene parameters (G, A); both are traced, so changing them never recompiles."""
+    """Scene parameters (G, A); both are traced, so changing them never recompiles.
+
+    Energy (planar): E_unif[theta] = 1/2 int theta'^2 + A/2 int sin^2(theta) + G int (1 - s)
+    cos(theta). Paper: eq. ``uniform_field_energy``.
+    """
 
     G: jax.Array | float
     A: jax.Array | float
