@@ -74,14 +74,43 @@ _copy_notebooks()
 _LITERAL = re.compile(r"(``.+?``)")
 
 
+def _escape(line: str) -> str:
+    """Escape the characters reStructuredText would read as markup, outside ``code``."""
+    parts = _LITERAL.split(line)
+    for j in range(0, len(parts), 2):
+        parts[j] = re.sub(r"(?<!\\)([|*])", r"\\\1", parts[j])
+    return "".join(parts)
+
+
+def _module_lines(lines: list[str]) -> list[str]:
+    """Module docstrings are plain text: their indented blocks (equations, tables) become
+    literal blocks, bullet continuations stay, and the rest is escaped."""
+    out, i, bullet = [], 0, False
+    while i < len(lines):
+        line = lines[i]
+        indented = line.startswith(" ") and line.strip()
+        if indented and bullet and not (out and not out[-1].strip()):
+            out.append(_escape(line))
+        elif indented:
+            if out and out[-1].strip():
+                out.append("")
+            out += ["::", ""]
+            while i < len(lines) and (lines[i].startswith(" ") or not lines[i].strip()):
+                out.append("    " + lines[i] if lines[i].strip() else "")
+                i += 1
+            out.append("")
+            bullet = False
+            continue
+        else:
+            bullet = line.lstrip().startswith("- ") or (bullet and bool(line.strip()))
+            out.append(_escape(line))
+        i += 1
+    return out
+
+
 def _escape_plain_maths(app, what, name, obj, options, lines) -> None:
-    """The docstrings write maths as plain text (|x|, alpha*, theta'^2): outside ``code``
-    escape the characters that reStructuredText would read as markup."""
-    for i, line in enumerate(lines):
-        parts = _LITERAL.split(line)
-        for j in range(0, len(parts), 2):
-            parts[j] = re.sub(r"(?<!\\)([|*])", r"\\\1", parts[j])
-        lines[i] = "".join(parts)
+    """The docstrings write maths as plain text (|x|, alpha*, theta'^2)."""
+    lines[:] = _module_lines(lines) if what == "module" else [_escape(x) for x in lines]
 
 
 def setup(app):
