@@ -97,6 +97,8 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "MapSpec": ("jaxrod.analysis.design_map", "MapSpec"),
         "bistability_map": ("jaxrod.analysis.design_map", "run_map"),
         "read_map": ("jaxrod.analysis.design_map", "read_store"),
+        "cusp_curve": ("jaxrod.analysis.design_map", "cusp_curve"),
+        "fold_crossings": ("jaxrod.analysis.design_map", "fold_crossings"),
     },
     "Calibration and inverse design": {
         "fit": ("jaxrod.analysis.fit", "fit"),

@@ -429,11 +429,12 @@ def cmd_map(args) -> int:
             ("bistable", "not_bistable", "fold_beyond_90", "invalid_input", "not_converged"),
             reasons, strict=True)}
         if not args.no_plot:
+            from jaxrod.analysis.design_map import cusp_curve, fold_crossings
             from jaxrod.plotting import design_map_figure
 
-            cusps = _row_cusps(spec, data)
-            summary["cusps"] = cusps
-            design_map_figure(data, spec, cusps).savefig(out / "map.png", dpi=120)
+            cusps, crossings = cusp_curve(spec, data), fold_crossings(spec, data)
+            summary["cusps"], summary["fold_crossings_90"] = cusps, crossings
+            design_map_figure(data, spec, cusps, crossings).savefig(out / "map.png", dpi=120)
         (out / "map.json").write_text(json.dumps(summary, indent=1))
     if args.json:
         print(json.dumps(summary))
@@ -443,31 +444,6 @@ def cmd_map(args) -> int:
         if "reason_counts" in summary:
             print(", ".join(f"{k}: {v}" for k, v in summary["reason_counts"].items()))
     return 0
-
-
-def _row_cusps(spec, data, rows: int = 12) -> list[dict]:
-    """The cusp in x on up to ``rows`` grid rows, each from the row's widest bistable
-    point (``find_cusp``): the cusp curve in the map's plane."""
-    import numpy as np
-
-    from jaxrod.analysis.fold_curves import find_cusp
-
-    out = []
-    for iy in np.unique(np.linspace(0, spec.y.count - 1, rows).astype(int)):
-        width = np.where(data["reason"][iy] == 0, data["width_deg"][iy], -np.inf)
-        if not np.isfinite(width.max()):
-            continue
-        ix = int(np.argmax(width))
-        start = spec.point.replace(spec.x.name, data["x"][ix]).replace(spec.y.name,
-                                                                       data["y"][iy])
-        try:
-            cusp = find_cusp(start, spec.x.name)
-        except ParameterError:
-            continue
-        if cusp.converged:
-            out.append({spec.y.name: float(data["y"][iy]), spec.x.name: cusp.value,
-                        "alpha_deg": cusp.alpha_deg})
-    return out
 
 
 def _output_dir(path: str) -> Path:

@@ -246,10 +246,11 @@ def fold_curve_figure(curves):
     return fig
 
 
-def design_map_figure(data: dict, spec, cusps=()):
+def design_map_figure(data: dict, spec, cusps=(), crossings=()):
     """Hysteresis width over the map's two inputs (filled contours), capture and release
-    angles as contour lines, the cusp curve (where the bistability ends) and the points
-    where a fold lies beyond 90 degrees."""
+    angles as contour lines, the cusp curve (where the bistability ends), the grid points
+    where a fold lies beyond 90 degrees and, from the fold curves, where the upper fold
+    reaches 90 degrees (``crossings``); the fixed inputs in the title."""
     from jaxrod.params import UNITS
 
     fig, ax = plt.subplots(figsize=(8, 5.6))
@@ -268,12 +269,18 @@ def design_map_figure(data: dict, spec, cusps=()):
     if cusps:
         ax.plot([c[spec.x.name] for c in cusps], [c[spec.y.name] for c in cusps], "k*-",
                 ms=8, label="cusp (bistability ends)")
+    if crossings:
+        ax.plot([c[spec.x.name] for c in crossings], [c[spec.y.name] for c in crossings],
+                "r^", ms=6, mec="k", label="fold curves: upper fold reaches 90 deg")
     unit = lambda n: f" ({UNITS[n]})" if UNITS[n] else ""
     ax.set_xlabel(spec.x.name + unit(spec.x.name))
     ax.set_ylabel(spec.y.name + unit(spec.y.name))
-    ax.set_title("bistable region: width filled; capture (white) and release (dark) angles",
-                 fontsize=10)
-    if beyond.any() or cusps:
+    fixed = ", ".join(f"{name} = {value:.4g}" for name, value in zip(
+        spec.point.names, spec.point.values, strict=True)
+        if name not in (spec.x.name, spec.y.name))
+    ax.set_title("bistable region: width filled; capture (white) and release (dark) angles"
+                 f"\n{fixed}, N = {spec.n}", fontsize=9)
+    if beyond.any() or cusps or crossings:
         ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     return fig

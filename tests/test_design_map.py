@@ -20,6 +20,7 @@ from jaxrod.analysis.design_map import (
     OK,
     MapAxis,
     MapSpec,
+    fold_crossings,
     read_store,
     run_map,
     solve_points,
@@ -178,3 +179,26 @@ def test_two_processes_identical_to_one(reference, tmp_path):
     assert sorted(s["process"] for s in summaries) == [0, 1]
     assert sum(s["computed"] for s in summaries) == 6  # each its own chunks
     _same(read_store(out), reference)
+
+
+def test_fold_crossings_bound_the_region_beyond_90_degrees():
+    """Two independent routes to one boundary: on a grid row at small clearance, the fold
+    curve's "alpha = 90 deg" event lies between the last grid point whose upper fold is
+    beyond 90 degrees and the first bistable one."""
+    point = _point()
+    x, y = MapAxis.parse("track-radius:0.1002:0.106:8"), MapAxis("E", 80e9, 90e9, 1)
+    spec = MapSpec(point, x, y, chunk=8)
+    rows = []
+    for R in x.values():
+        v = list(point.values)
+        v[point.index("track-radius")], v[point.index("E")] = R, 80e9
+        rows.append(v)
+    res = solve_points(point, np.array(rows))
+    data = {"x": x.values(), "y": y.values()} | {k: v[None, :] for k, v in res.items()}
+    reason = res["reason"]
+    assert reason[0] == FOLD_BEYOND_90 and reason[-1] == OK
+    last_beyond = np.nonzero(reason == FOLD_BEYOND_90)[0].max()
+    assert (reason[last_beyond + 1:] == OK).all()
+    crossings = fold_crossings(spec, data)
+    assert len(crossings) == 1
+    assert x.values()[last_beyond] < crossings[0]["track-radius"] < x.values()[last_beyond + 1]

@@ -49,7 +49,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.analysis.batch import fold_pair_states
-from jaxrod.analysis.fold_curves import DesignPoint, groups_of, range_of
+from jaxrod.analysis.fold_curves import (
+    DesignPoint,
+    find_cusp,
+    fold_curves,
+    groups_of,
+    range_of,
+)
 from jaxrod.analysis.magnet import default_options, locate_folds
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import UNITS, ParameterError
@@ -420,3 +426,50 @@ def run_map(spec: MapSpec, out: Path, progress: bool = True, devices=None) -> di
             "computed": len(todo), "resumed": len(mine) - len(todo)}
 
 
+def fold_crossings(spec, data, rows: int = 12) -> list[dict]:
+    """Where the upper fold reaches alpha = 90 degrees on up to ``rows`` grid rows: the fold
+    curves in x from each row's widest bistable point to both ends of the axis
+    (``fold_curves``), their "alpha = 90 deg" events. With the cusps they bound the
+    bistable region independently of the grid (paper: the folds of Proposition
+    ``thm:planar_fold`` followed in x)."""
+    out = []
+    for iy in np.unique(np.linspace(0, spec.y.count - 1, rows).astype(int)):
+        width = np.where(data["reason"][iy] == 0, data["width_deg"][iy], -np.inf)
+        if not np.isfinite(width.max()) or not (data["reason"][iy] == 2).any():
+            continue
+        ix = int(np.argmax(width))
+        start = spec.point.replace(spec.x.name, data["x"][ix]).replace(spec.y.name,
+                                                                       data["y"][iy])
+        for end in (spec.x.start, spec.x.stop):
+            if end == data["x"][ix]:
+                continue
+            try:
+                curves = fold_curves(start, spec.x.name, end)
+            except ParameterError:
+                continue
+            out += [{spec.y.name: float(data["y"][iy]), spec.x.name: e.value}
+                    for e in curves.events if e.kind == "alpha = 90 deg" and e.converged]
+    return out
+
+
+def cusp_curve(spec, data, rows: int = 12) -> list[dict]:
+    """The cusp in x on up to ``rows`` grid rows, each from the row's widest bistable
+    point (``find_cusp``): the cusp curve in the map's plane, where the two fold curves of
+    each row meet and the hysteresis closes (paper: the width of eq. ``intro-hysteresis``
+    goes to zero)."""
+    out = []
+    for iy in np.unique(np.linspace(0, spec.y.count - 1, rows).astype(int)):
+        width = np.where(data["reason"][iy] == 0, data["width_deg"][iy], -np.inf)
+        if not np.isfinite(width.max()):
+            continue
+        ix = int(np.argmax(width))
+        start = spec.point.replace(spec.x.name, data["x"][ix]).replace(spec.y.name,
+                                                                       data["y"][iy])
+        try:
+            cusp = find_cusp(start, spec.x.name)
+        except ParameterError:
+            continue
+        if cusp.converged:
+            out.append({spec.y.name: float(data["y"][iy]), spec.x.name: cusp.value,
+                        "alpha_deg": cusp.alpha_deg})
+    return out
