@@ -31,17 +31,16 @@ from common import RESULTS, write_results  # noqa: E402
 WORKER = """\
 import json, sys, tempfile, time
 import jax
-from jaxrod.analysis.design_map import Axis, MapSpec, run_map
-from jaxrod.analysis.fold_curves import DesignPoint
-from jaxrod.params import NDFEB_MAGNET, preset
-rod, _ = preset("permanent-magnet")
-point = DesignPoint.from_physical(rod, NDFEB_MAGNET)
+import jaxrod as jr
+from jaxrod.params import NDFEB_MAGNET
+rod, _ = jr.preset("permanent-magnet")
+point = jr.DesignPoint.from_physical(rod, NDFEB_MAGNET)
 x, y, chunk = {x!r}, {y!r}, {chunk}
 def once(xs, ys):
-    spec = MapSpec(point, Axis.parse(xs), Axis.parse(ys), chunk=chunk)
+    spec = jr.MapSpec(point, jr.MapAxis.parse(xs), jr.MapAxis.parse(ys), chunk=chunk)
     with tempfile.TemporaryDirectory() as out:
         t0 = time.perf_counter()
-        counts = run_map(spec, out, progress=False)
+        counts = jr.bistability_map(spec, out, progress=False)
         return time.perf_counter() - t0, counts
 warm, _ = once({warm_x!r}, {warm_y!r})
 wall, counts = once(x, y)
