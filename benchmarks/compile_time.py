@@ -27,15 +27,17 @@ HERE = Path(__file__).resolve().parent
 D_EXP = 11.25 / 9.2
 MAGNET = ["--G", "2.2", "--M", "0.0236", "--D", repr(D_EXP)]
 
+SCENE = f"jr.magnet_scene(2.2, 0.0236, {D_EXP!r})"
 ENTRY_POINTS = {  # (the names to load before timing, the call)
     "greenhill": ("jr.greenhill", "jr.greenhill(10.0, 'clamped', A=5.0)"),
-    "folds (locate_folds)": ("jr.folds, jr.magnet_scene", f"jr.folds(jr.magnet_scene(2.2, 0.0236, {D_EXP!r}))"),
-    "fold_pair": ("jr.fold_pair, jr.magnet_scene", f"jr.fold_pair(jr.magnet_scene(2.2, 0.0236, {D_EXP!r}))"),
+    "folds (locate_folds)": ("jr.folds, jr.magnet_scene", f"jr.folds({SCENE})"),
+    "fold_pair": ("jr.fold_pair, jr.magnet_scene", f"jr.fold_pair({SCENE})"),
     "folds --method reduced": ("jr.reduced_folds, jr.magnet_scene",
-                               f"jr.reduced_folds(jr.magnet_scene(2.2, 0.0236, {D_EXP!r}))"),
-    "branch (trace_diagram)": ("jr.diagram, jr.magnet_scene", f"jr.diagram(jr.magnet_scene(2.2, 0.0236, {D_EXP!r}))"),
-    "sweep": ("jr.sweep, jr.magnet_scene", f"jr.sweep(jr.magnet_scene(2.2, 0.0236, {D_EXP!r}))"),
-    "fit": ("jr.fit_youngs_modulus", "jr.fit_youngs_modulus([-25.0, 38.0, 24.0, -42.0], 1.0, True)"),
+                               f"jr.reduced_folds({SCENE})"),
+    "branch (trace_diagram)": ("jr.diagram, jr.magnet_scene", f"jr.diagram({SCENE})"),
+    "sweep": ("jr.sweep, jr.magnet_scene", f"jr.sweep({SCENE})"),
+    "fit": ("jr.fit_youngs_modulus",
+            "jr.fit_youngs_modulus([-25.0, 38.0, 24.0, -42.0], 1.0, True)"),
 }
 
 CHILD = """
