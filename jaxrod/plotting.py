@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import matplotlib
 
 if not matplotlib.get_backend().lower().startswith("module://"):  # keep notebook backends
@@ -278,8 +280,8 @@ def design_map_figure(data: dict, spec, cusps=(), crossings=()):
     fixed = ", ".join(f"{name} = {value:.4g}" for name, value in zip(
         spec.point.names, spec.point.values, strict=True)
         if name not in (spec.x.name, spec.y.name))
-    ax.set_title("bistable region: width filled; capture (white) and release (dark) angles"
-                 f"\n{fixed}, N = {spec.n}", fontsize=9)
+    ax.set_title("bistable region: width filled; capture (white) and release (dark) angles\n"
+                 + "\n".join(textwrap.wrap(f"{fixed}, N = {spec.n}", 95)), fontsize=9)
     if beyond.any() or cusps or crossings:
         ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
