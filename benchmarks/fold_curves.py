@@ -83,7 +83,18 @@ def jaxrod_timing(repeat: int = 3) -> dict:
         t0 = time.perf_counter()
         _, _, cusps, _ = route()
         one.append(time.perf_counter() - t0)
+    # the work of an AUTO run that stops at the first cusp: the lower fold's curve alone,
+    # from the limit point towards larger D, to the first cusp (refined)
+    to_first = lambda: fc.trace_fold_curve(_point(), "D", (LOW_END, 1.5), max_cusps=1)
+    to_first()
+    to_cusp = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        _, _, first_cusps, _ = to_first()
+        to_cusp.append(time.perf_counter() - t0)
     return {"first_call_s": cold, "warm_s": min(warm), "warm_to_first_cusp_s": min(warm_up),
+            "one_curve_to_first_cusp_s": min(to_cusp),
+            "one_curve_first_cusp_D": first_cusps[0].value,
             "one_curve_s": min(one), "one_curve_cusps_D": [c.value for c in cusps],
             "cusp_D": first.value,
             "second_cusp_D": second.value, "second_cusp_alpha_deg": second.alpha_deg,
@@ -361,7 +372,7 @@ def run(quick: bool, auto: bool, jaxcont: bool) -> dict:
                 whole = r["second_cusp_D"] is not None
                 r["reached"] = "both cusps" if whole else "first cusp"
                 r["ratio_to_jaxrod_warm"] = r["run_s"] / (
-                    timing["one_curve_s"] if whole else timing["warm_to_first_cusp_s"])
+                    timing["one_curve_s"] if whole else timing["one_curve_to_first_cusp_s"])
             print(f"AUTO {r}", flush=True)
             rows.append(r)
         result["auto"] = rows
@@ -396,15 +407,20 @@ def markdown(res: dict) -> str:
                      f"| {_e(r['second_cusp_D_error'])} |")
     lines += ["", "## Side by side (both cusps from the same limit point)", "",
               "Ratios: AUTO runs that reach both cusps against jaxrod's one-curve route, "
-              "those that stop at the first cusp against jaxrod's run to it; JaxCont against "
+              "those that stop at the first cusp against jaxrod's one curve from the lower fold "
+              "to the first cusp (the same work); JaxCont against "
               "jaxrod's `fold_curves` pair.", "",
               "| method | setting | cusp D error | second cusp D error | time | ratio to "
               "jaxrod warm |", "|---|---|---|---|---|---|",
               f"| jaxrod `fold_curves` (warm) | N = 16, {j['points']} points | "
               f"{_e(j['cusp_D_error'])} | {_e(j['second_cusp_D_error'])} | "
               f"{1e3 * j['warm_s']:.0f} ms | 1 |",
-              f"| jaxrod, the run to D = 1.5 alone (first cusp) | N = 16 | | | "
+              f"| jaxrod, the run to D = 1.5 alone (both folds, first cusp) | N = 16 | | | "
               f"{1e3 * j['warm_to_first_cusp_s']:.0f} ms | |",
+              f"| jaxrod `trace_fold_curve`: the lower fold's curve to the first cusp "
+              f"(AUTO's work when it stops there) | N = 16 | "
+              f"{_e(abs(j['one_curve_first_cusp_D'] - ref['cusp_D']))} | | "
+              f"{1e3 * j['one_curve_to_first_cusp_s']:.0f} ms | |",
               f"| jaxrod `trace_fold_curve`: AUTO's route, one curve from the lower fold "
               f"round both cusps | N = 16 | {_e(abs(j['one_curve_cusps_D'][0] - ref['cusp_D']))}"
               f" | {_e(abs(j['one_curve_cusps_D'][1] - ref['second_cusp_D']))} | "
