@@ -63,6 +63,18 @@ def _jaxrod_pair(n=fc.DEFAULT_N):
     return up.cusp, down.cusp, up, down
 
 
+def _one_curve(max_cusps: int, repeat: int):
+    """(best warm time, result) of the lower fold's curve in D from the limit point through
+    up to ``max_cusps`` cusps (``trace_fold_curve``)."""
+    run = lambda: fc.trace_fold_curve(_point(), "D", (LOW_END, 1.5), max_cusps=max_cusps)
+    out, best = run(), math.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = run()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
 def jaxrod_timing(repeat: int = 3) -> dict:
     t0 = time.perf_counter()
     first, second, up, down = _jaxrod_pair()
@@ -75,27 +87,14 @@ def jaxrod_timing(repeat: int = 3) -> dict:
         jr.fold_curves(_point(), "D", LOW_END)
         warm.append(time.perf_counter() - t0)
         warm_up.append(t1 - t0)
-    # AUTO's route: one curve from the lower fold through the first cusp to the second
-    route = lambda: fc.trace_fold_curve(_point(), "D", (LOW_END, 1.5), max_cusps=2)
-    route()
-    one = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        _, _, cusps, _ = route()
-        one.append(time.perf_counter() - t0)
-    # the work of an AUTO run that stops at the first cusp: the lower fold's curve alone,
-    # from the limit point towards larger D, to the first cusp (refined)
-    to_first = lambda: fc.trace_fold_curve(_point(), "D", (LOW_END, 1.5), max_cusps=1)
-    to_first()
-    to_cusp = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        _, _, first_cusps, _ = to_first()
-        to_cusp.append(time.perf_counter() - t0)
+    # AUTO's route: one curve from the lower fold through the first cusp to the second;
+    # and the work of an AUTO run that stops at the first cusp: that curve to the first cusp
+    one, (_, _, cusps, _) = _one_curve(2, repeat)
+    to_cusp, (_, _, first_cusps, _) = _one_curve(1, repeat)
     return {"first_call_s": cold, "warm_s": min(warm), "warm_to_first_cusp_s": min(warm_up),
-            "one_curve_to_first_cusp_s": min(to_cusp),
+            "one_curve_to_first_cusp_s": to_cusp,
             "one_curve_first_cusp_D": first_cusps[0].value,
-            "one_curve_s": min(one), "one_curve_cusps_D": [c.value for c in cusps],
+            "one_curve_s": one, "one_curve_cusps_D": [c.value for c in cusps],
             "cusp_D": first.value,
             "second_cusp_D": second.value, "second_cusp_alpha_deg": second.alpha_deg,
             "points": sum(len(c.value) for c in up.curves + down.curves)}
