@@ -47,9 +47,12 @@ def test_diagram_figure(paper_report, tmp_path):
 
 
 def test_diagram_is_dense_near_the_folds(paper_report):
-    a = np.degrees(paper_report.branch.alpha)
+    """In the figure's (alpha, tip) plane, in degrees: no step longer than 3 (the default
+    steps reach 5.7) and two points within 1 of each fold (the default: 1.4 at the lower)."""
+    a, t = np.degrees(paper_report.branch.alpha), np.degrees(paper_report.branch.tip)
+    assert np.hypot(np.diff(a), np.diff(t)).max() < 3.0
     for f in paper_report.folds:
-        assert np.sort(np.abs(a - f.alpha_deg))[1] < 0.5  # two points within 0.5 deg
+        assert np.sort(np.hypot(a - f.alpha_deg, t - f.tip_deg))[1] < 1.0
 
 
 @pytest.mark.parametrize("M, hysteresis", [(PAPER[1], True), (0.005, False)])
