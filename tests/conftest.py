@@ -1,8 +1,5 @@
-import atexit
 import os
-import shutil
 import sys
-import tempfile
 
 import pytest
 
@@ -10,15 +7,13 @@ sys.path.insert(0, os.path.dirname(__file__))
 # The CLI's persistent compilation cache stays off in the test process (and the processes it
 # starts): tests must not depend on, or write into, a user's cache.
 os.environ.setdefault("JAXROD_NO_CACHE", "1")
-# One fresh compilation cache for this test session, shared by the test workers and every
-# process they start (benchmark scripts, notebooks, the CLI): a program that several of them
-# compile is compiled once. Created by the first process (the xdist controller), removed when
-# it exits; the benchmark that measures compile times gives its children no cache of ours.
-if "JAX_COMPILATION_CACHE_DIR" not in os.environ:
-    _cache = tempfile.mkdtemp(prefix="jaxrod-test-xla-")
-    atexit.register(shutil.rmtree, _cache, ignore_errors=True)
-    os.environ["JAX_COMPILATION_CACHE_DIR"] = _cache
-    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.2")
+# No persistent XLA compilation cache either: the test processes (xdist workers, and the
+# benchmark scripts, notebooks and CLI runs they start) must not read executables that other
+# processes are writing. A shared cache once took a worker down inside XLA's deserialisation
+# (a fatal signal, not an exception), and pytest-xdist's grouped scheduling then waits forever
+# for the lost worker. Each process compiles what it runs.
+for _variable in ("JAX_COMPILATION_CACHE_DIR", "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"):
+    os.environ.pop(_variable, None)
 
 import jaxrod  # noqa: E402,F401  (sets float64)
 
