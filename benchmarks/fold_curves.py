@@ -131,7 +131,7 @@ def conditioning(samples: int = 8) -> list[dict]:
     vary = fc.Vary("groups", 2)
     base = jnp.asarray(point.values)
     # states along the curve: re-run to get them (the FoldCurve keeps observables only)
-    w0, _ = fc._start(point, fc.DEFAULT_N)
+    w0 = fc._start(point, fc.DEFAULT_N)
     runs, _, _, _, _ = fc._run(point, "D", 0.0 - 1e-3, 0.3, w0, [1.0, 1.0], fc.DEFAULT_N, 1.0)
     k = len(lower.value) - 1
     W = np.concatenate([np.full(2 * m, 1.0 / m), [1.0, 1.0]])

@@ -1,5 +1,8 @@
+import atexit
 import os
+import shutil
 import sys
+import tempfile
 
 import pytest
 
@@ -7,13 +10,15 @@ sys.path.insert(0, os.path.dirname(__file__))
 # The CLI's persistent compilation cache stays off in the test process (and the processes it
 # starts): tests must not depend on, or write into, a user's cache.
 os.environ.setdefault("JAXROD_NO_CACHE", "1")
-# No persistent XLA compilation cache either: the test processes (xdist workers, and the
-# benchmark scripts, notebooks and CLI runs they start) must not read executables that other
-# processes are writing. A shared cache once took a worker down inside XLA's deserialisation
-# (a fatal signal, not an exception), and pytest-xdist's grouped scheduling then waits forever
-# for the lost worker. Each process compiles what it runs.
-for _variable in ("JAX_COMPILATION_CACHE_DIR", "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"):
-    os.environ.pop(_variable, None)
+# One fresh compilation cache for this test session, shared by the test workers and every
+# process they start (benchmark scripts, notebooks, the CLI): a program that several of them
+# compile is compiled once. Created by the first process (the xdist controller), removed when
+# it exits; the benchmark that measures compile times gives its children no cache of ours.
+if "JAX_COMPILATION_CACHE_DIR" not in os.environ:
+    _cache = tempfile.mkdtemp(prefix="jaxrod-test-xla-")
+    atexit.register(shutil.rmtree, _cache, ignore_errors=True)
+    os.environ["JAX_COMPILATION_CACHE_DIR"] = _cache
+    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.2")
 
 import jaxrod  # noqa: E402,F401  (sets float64)
 
@@ -30,3 +35,33 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.xdist_group(name))
     # the long subprocess tests first, so that no worker is left with one at the end
     items.sort(key=lambda item: os.path.basename(str(item.fspath)) not in SPREAD)
+
+
+#: Memory mappings above which a test process drops its compiled programs between modules.
+#: XLA's CPU backend maps every executable's code and data; a worker that compiles many
+#: distinct programs (each module its own scenes, degrees and shapes) approaches the kernel's
+#: limit (vm.max_map_count, 65530 by default) and then aborts inside a compilation. The
+#: mappings of repeated calls stay flat (tests/test_soak.py); this is only about how many
+#: different programs one process holds.
+MAPPINGS_HIGH = 25_000
+
+
+def _mappings() -> int:
+    try:
+        with open("/proc/self/maps") as f:
+            return sum(1 for _ in f)
+    except OSError:  # not Linux: no such limit to watch
+        return 0
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _release_programs_when_mappings_are_high():
+    yield
+    if _mappings() > MAPPINGS_HIGH:
+        import gc
+
+        import jax
+
+        jax.clear_caches()
+        gc.collect()
+

@@ -129,7 +129,9 @@ def test_fold_curve_follows_round_the_cusp_back_to_the_other_fold():
     """From the lower fold with D increasing, the curve turns back in D at the cusp and
     returns as the upper fold: at the starting D it is locate_folds' upper fold."""
     point = fc.DesignPoint.from_groups(*CASES[200], D_EXP)
-    w0, folds = fc._start(point, fc.DEFAULT_N)
+    w0 = fc._start(point, fc.DEFAULT_N)
+    folds = sorted(locate_folds(DipoleMagnet(*point.groups(), 0.0)).folds,
+                   key=lambda f: f.alpha_deg)
     disc = planar_discretisation(fc.DEFAULT_N, "clamped")
     opts = fc.CURVE_OPTIONS._replace(u_min=-0.01, u_max=0.5)
     run = jax.jit(fold_curve_run, static_argnums=(0, 1, 5))(
@@ -172,3 +174,34 @@ def test_bad_inputs_are_refused():
         fc.find_cusp(fc.DesignPoint.from_groups(2.2, 0.001, D_EXP), "D")
     with pytest.raises(ParameterError, match="D"):
         fc.DesignPoint.from_groups(2.2, 0.0236, 1.0)
+
+
+@pytest.mark.parametrize("groups", [(*CASES[200], D_EXP), (*CASES[100], D_EXP),
+                                    (2.887, 0.01795, 1.1915)])
+def test_fold_curves_start_at_the_folds_of_locate_folds(groups, monkeypatch):
+    """The start of every fold curve, from the batched fold-pair path (or from locate_folds
+    where that path does not converge), is the pair of folds of locate_folds: same angles,
+    same states. (2.887, 0.01795, 1.1915) is the 13-degree loop the batched path once
+    flagged as not converged; with the batched path forced to fail, the fallback gives the
+    same start."""
+    point = fc.DesignPoint.from_groups(*groups)
+    folds = sorted(locate_folds(DipoleMagnet(*groups, 0.0)).folds, key=lambda f: f.alpha_deg)
+    assert [f.kind for f in folds] == ["lower", "upper"]
+    m = planar_discretisation(fc.DEFAULT_N).size
+
+    def check(w0):
+        for w, fold in zip(w0, folds):
+            assert abs(math.degrees(w[2 * m]) - fold.alpha_deg) < 1e-10
+            np.testing.assert_allclose(w[:m], fold.theta, atol=1e-10)
+            phi = w[m:2 * m]  # a null vector: parallel to locate_folds' one
+            cos = abs(phi @ fold.null_vector) / np.linalg.norm(phi) / np.linalg.norm(
+                fold.null_vector)
+            assert cos > 1 - 1e-12
+            assert w[-1] == 0.0
+
+    check(fc._start(point, fc.DEFAULT_N))
+    z, _ = fc._pair_start(*(jnp.asarray(v) for v in groups),
+                          planar_discretisation(fc.DEFAULT_N, "clamped"))
+    monkeypatch.setattr(fc, "_pair_start", lambda *a: (z, False))
+    check(fc._start(point, fc.DEFAULT_N))
+

@@ -39,7 +39,7 @@ from jaxrod.solvers.newton import newton
 
 #: The (q, alpha) grid that brackets the one-mode folds: q in [0, Q_MAX], alpha in [0, 90] deg.
 GRID_Q, GRID_ALPHA, Q_MAX = 40, 40, 1.6
-#: Bracketing cells kept per parameter set before the first and last are picked.
+#: Bracketing cells kept per parameter set.
 CANDIDATES = 64
 
 #: Newton's budgets in the batch (its loops run to the slowest element): the one-mode solve
@@ -133,12 +133,18 @@ def _canonical(z, m):
     return jnp.concatenate([sign * z[:m], z[m:2 * m], jnp.atleast_1d(sign * alpha)])
 
 
-def fold_pair_states(G, M, D, disc: PlanarDiscretisation):
+def fold_pair_states(G, M, D, disc: PlanarDiscretisation, cells: int = 1):
     """The two Moore-Spence fold states z = (theta, phi, alpha) (2, 2m + 1), lower fold
     first, reached from the one-mode brackets (module docstring), with converged and the
     Moore-Spence iteration count (one parameter set; vmap it). The dtype of ``disc``
     (float64 or float32) sets the precision. A state is a warm start for the same fold at
-    nearby parameters (``jaxrod.analysis.fit``)."""
+    nearby parameters (``jaxrod.analysis.fit``).
+
+    ``cells`` (static): how many of the first and of the last bracketing cells start a
+    one-mode solve. One each is the fast default; more cost more (a batch's loops run to its
+    slowest solve) and rescue the small clearances, where the straight rod is nearly
+    critical at alpha = 0 and the first cells, near q = 0, lead the solve to the upper fold
+    (``jaxrod.analysis.design_map`` retries its failures with 4)."""
     dtype = disc.quad_weights.dtype
     tol, xtol, stall = TOLERANCES[jnp.dtype(dtype)]
     scene = DipoleMagnet(G, M, D, jnp.zeros((), dtype))
@@ -149,25 +155,39 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation):
     al = jnp.linspace(0.0, 0.5 * jnp.pi, GRID_ALPHA, dtype=dtype)
     moments = _one_mode_moments(qs, psi_q, disc, *_grid_sines(qs[1], GRID_Q, psi_q))
     F0, F0q = _one_mode_derivatives(qs, moments, al[:, None], bend, scene)
-    cells = _sign_change(F0) & _sign_change(F0q)
-    # the cells of smallest and largest alpha (row-major order: alpha first) that both
-    # contours cross bracket the lower and the upper one-mode fold
-    count = jnp.sum(cells)
-    ia, iq = jnp.nonzero(cells, size=CANDIDATES, fill_value=0)
-    pick = jnp.stack([0, jnp.clip(count - 1, 0, CANDIDATES - 1)])
-    ia, iq = ia[pick], iq[pick]
+    cells_crossed = _sign_change(F0) & _sign_change(F0q)
+    # the first and the last ``cells`` of the grid cells that both contours cross
+    # (row-major: alpha first) start one-mode Newton solves; the converged one-mode folds of
+    # smallest and largest alpha are the lower and the upper one
+    count = jnp.sum(cells_crossed)
+    ia, iq = jnp.nonzero(cells_crossed, size=CANDIDATES, fill_value=0)
+    k = jnp.arange(cells)
+    slot = jnp.concatenate([k, count - cells + k])
+    used = (slot >= 0) & (slot < count)
+    slot = jnp.clip(slot, 0, CANDIDATES - 1)
+    ia, iq = ia[slot], iq[slot]
     start = jnp.stack([0.5 * (qs[iq] + qs[iq + 1]), 0.5 * (al[ia] + al[ia + 1])], axis=1)
-    # a batch runs its Newton loops until the slowest element is done: an element without
-    # brackets starts from NaN, which ends its solves at the first pass (not converged)
-    start = jnp.where(count >= 2, start, jnp.nan)
+    # a batch runs its Newton loops until the slowest element is done: unused slots (and an
+    # element without brackets) start from NaN, which ends their solves at the first pass
+    start = jnp.where(used[:, None], start, jnp.nan)
 
     def one_mode(x0):
         residual = lambda x, _: jnp.stack(_one_mode_derivatives(
             x[0], _one_mode_moments(x[0], psi_q, disc), x[1], bend, scene))
         return newton(residual, x0, None, tol=tol, xtol=xtol, stall_xtol=stall, **ONE_MODE_BUDGET)
 
-    one = jax.vmap(one_mode)(start)
-    found = (count >= 2) & jnp.all(one.converged)
+    solves = jax.vmap(one_mode)(start)
+    # a solve may land on a periodic or mirror image of a fold (as in ``_canonical``)
+    a = jnp.mod(solves.x[:, 1] + jnp.pi, 2.0 * jnp.pi) - jnp.pi
+    sign = jnp.where(a < 0.0, -1.0, 1.0).astype(dtype)
+    q, a = sign * solves.x[:, 0], sign * a
+    # (the one-mode folds may lie a little beyond 90 degrees where the Moore-Spence solves
+    # reach folds inside: only the final folds are held to (0, 90])
+    usable = solves.converged & (a > 0.0)
+    pick = jnp.stack([jnp.argmin(jnp.where(usable, a, jnp.inf)),
+                      jnp.argmax(jnp.where(usable, a, -jnp.inf))])
+    one_x = jnp.stack([q[pick], a[pick]], axis=1)
+    found = (jnp.sum(usable) >= 2) & (a[pick[1]] - a[pick[0]] > 1e3 * xtol)
 
     ell = psi / jnp.dot(psi, psi)
 
@@ -177,7 +197,7 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation):
                      stall_xtol=stall, linearise=moore_spence_linearisation, **FOLD_BUDGET)
         return res.x, res
 
-    states, ms = jax.vmap(fold)(one.x)
+    states, ms = jax.vmap(fold)(one_x)
     z = jax.vmap(lambda z: _canonical(z, disc.size))(states)
     z = z[jnp.argsort(z[:, -1])]
     alphas = z[:, -1]

@@ -2,15 +2,20 @@
 a grid, chunked on disk, resumable, sharded over devices and processes.
 
 A map varies two inputs of a ``DesignPoint`` (groups or physical inputs, the others fixed)
-over a grid ``name:start:stop:count`` each. Every grid point goes through three tiers, so no
-point is dropped silently:
+over a grid ``name:start:stop:count`` each. Every grid point goes through up to four
+tiers, so no point is dropped silently:
 
 1. the batched fold-pair path (``jaxrod.analysis.batch.fold_pair_states``: one-mode brackets
    and Moore-Spence, fixed cost per point), vmapped over a chunk;
-2. points it does not converge are retried by a batched continuation from the straight rod
+2. points it does not converge are retried by the same path started from more bracketing
+   cells (``RETRY_CELLS`` at each end instead of one: the small clearances);
+3. points still failing are retried by a batched continuation from the straight rod
    (the ``locate_folds`` algorithm, vmapped: pseudo-arclength in alpha up to 180 degrees,
    the first two folds refined by Moore-Spence), which also tells why there is no pair;
-3. points still failing there are retried by ``locate_folds`` itself, one by one.
+4. points still failing there are retried by ``locate_folds`` itself, one by one.
+
+The retry tiers run on padded batches (powers of two), so that a map compiles each of their
+programs a few times, not once per number of failures.
 
 Each point ends with a reason code (``REASONS``): OK, NOT_BISTABLE (the branch through the
 straight rod has fewer than two folds with alpha in (0, 180] degrees), FOLD_BEYOND_90 (a fold
@@ -144,7 +149,7 @@ def _validity(point: DesignPoint, values: np.ndarray) -> np.ndarray:
                 & range_of("D").contains(D) & (D > 1.0 + radius))
 
 
-# --- tier 1 and 2: batched solves over a chunk ----------------------------------------------
+# --- tiers 1 to 3: batched solves over a chunk ---------------------------------------------
 
 #: Capacity of the retry continuation (alpha up to 180 degrees, two folds).
 RETRY_CAPACITY = 160
@@ -182,9 +187,13 @@ def _retry_one(G, M, D, disc):
     return alphas, code
 
 
-def _chunk_program(G, M, D, n):
+#: Bracketing cells per end that the second tier solves from (``fold_pair_states``).
+RETRY_CELLS = 4
+
+
+def _chunk_program(G, M, D, n, cells=1):
     disc = planar_discretisation(n, "clamped")
-    z, converged, _ = jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc))(G, M, D)
+    z, converged, _ = jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc, cells))(G, M, D)
     return z[:, :, -1], converged
 
 
@@ -193,7 +202,16 @@ def _retry_program(G, M, D, n):
     return jax.vmap(lambda g, m, d: _retry_one(g, m, d, disc))(G, M, D)
 
 
+_wider = jax.jit(_chunk_program, static_argnames=("n", "cells"))
 _retry = jax.jit(_retry_program, static_argnames=("n",))
+
+
+def _bucketed(arrays):
+    """The 1-D arrays padded (repeating their first entry) to the next power of two, at
+    least 8: the retry tiers compile once per bucket, not once per number of failures."""
+    k = arrays[0].shape[0]
+    size = max(8, 1 << (k - 1).bit_length())
+    return [np.concatenate([a, np.repeat(a[:1], size - k)]) for a in arrays]
 
 
 @functools.lru_cache(maxsize=16)
@@ -240,15 +258,23 @@ def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
         alphas[ok] = a[ok]
         reason[ok] = OK
         retry = np.nonzero(valid & ~ok)[0]
-        if retry.size:
-            # on one device (a small share of a map)
+        if retry.size:  # tier 2, on one device (a small share of a map)
             with jax.default_device(devices[0]):
-                a2, code = jax.device_get(_retry(G[retry], M[retry], D[retry], n=n))
+                a1, ok1 = jax.device_get(_wider(*_bucketed([G[retry], M[retry], D[retry]]),
+                                                n=n, cells=RETRY_CELLS))
+            a1, ok1 = np.asarray(a1)[:retry.size], np.asarray(ok1)[:retry.size]
+            alphas[retry[ok1]] = a1[ok1]
+            reason[retry[ok1]] = OK
+            retry = retry[~ok1]
+        if retry.size:  # tier 3
+            with jax.default_device(devices[0]):
+                a2, code = jax.device_get(_retry(*_bucketed([G[retry], M[retry], D[retry]]),
+                                                 n=n))
             a2, code = np.asarray(a2)[:retry.size], np.asarray(code)[:retry.size]
             good = code == OK
             alphas[retry[good]] = a2[good]
             reason[retry] = code
-            for i in retry[code == NOT_CONVERGED]:  # tier 3: one by one
+            for i in retry[code == NOT_CONVERGED]:  # tier 4: one by one
                 rep = locate_folds(DipoleMagnet(G[i], M[i], D[i], 0.0), n=max(n, 16))
                 kinds = {f.kind: f for f in rep.folds}
                 if rep.converged and "lower" in kinds and "upper" in kinds:

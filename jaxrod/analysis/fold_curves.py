@@ -11,14 +11,15 @@ M_magnet a^3 / (3 E b^2 L), D = R_track / L) inside the traced program, so any o
 can be the second parameter. It varies as v = v0 (1 + u): the continuation variable u is the
 relative change, which puts every input on the same scale.
 
-``fold_curves`` starts at the two folds of the given point (``locate_folds``), follows each
-by pseudo-arclength on the Moore-Spence system in (theta, phi, alpha, u)
-(``jaxrod.solvers.fold_curve``) towards the requested value, and refines the cusp where
-d2F/dq2 changes sign along a curve (beyond it the curve continues as the other fold).
-``find_cusp`` follows the lower fold both ways and returns the nearest cusp. Along a curve
-it records alpha*, q*, tip*, dF/dalpha, d2F/dq2 (with phi scaled to int phi = 1) and the two
-smallest Hessian eigenvalues (one is zero at the fold; the other's sign tells the fold's
-stability data: a fold between a stable and an index-1 branch has it positive).
+``fold_curves`` starts at the two folds of the given point (the batched fold-pair path,
+``locate_folds`` where it does not converge), follows each by pseudo-arclength on the
+Moore-Spence system in (theta, phi, alpha, u) (``jaxrod.solvers.fold_curve``) towards the
+requested value, and refines the cusp where d2F/dq2 changes sign along a curve (beyond it
+the curve continues as the other fold). ``find_cusp`` follows the lower fold both ways and
+returns the nearest cusp. Along a curve it records alpha*, q*, tip*, dF/dalpha, d2F/dq2
+(with phi scaled to int phi = 1) and the two smallest Hessian eigenvalues (one is zero at
+the fold; the other's sign tells the fold's stability data: a fold between a stable and an
+index-1 branch has it positive).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxrod.analysis.batch import fold_pair_states
 from jaxrod.analysis.magnet import DEFAULT_N, locate_folds
 from jaxrod.analysis.reduction import mean_functional
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
@@ -338,8 +340,29 @@ def check_target(point: DesignPoint, name: str, to: float) -> float:
     return float(to)
 
 
-def _start(point: DesignPoint, n: int):
+#: Bracketing cells per end the start's fold-pair solve uses (one point: the robust setting).
+START_CELLS = 4
+
+
+def _pair_start_program(G, M, D, disc):
+    z, converged, _ = fold_pair_states(G, M, D, disc, START_CELLS)
+    return z, converged
+
+
+_pair_start = StoredProgram("fold-pair-start", _pair_start_program)
+
+
+def _start(point: DesignPoint, n: int) -> np.ndarray:
+    """The lower and upper folds of ``point`` as fold-curve states w = (theta, phi, alpha,
+    u = 0), (2, 2m + 2): from the batched fold-pair path (one-mode brackets refined by
+    Moore-Spence, ``jaxrod.analysis.batch``), or, where that path does not converge, from
+    ``locate_folds`` (a continuation from the straight rod)."""
     G, M, D = point.groups()
+    disc = planar_discretisation(n, "clamped")
+    z, converged = jax.device_get(_pair_start(*(jnp.asarray(v, jnp.float64) for v in (G, M, D)),
+                                              disc))
+    if converged:
+        return np.concatenate([np.asarray(z), np.zeros((2, 1))], axis=1)
     report = locate_folds(DipoleMagnet(G, M, D, 0.0), n=n)
     kinds = {f.kind: f for f in report.folds}
     if "lower" not in kinds or "upper" not in kinds or not report.converged:
@@ -347,10 +370,8 @@ def _start(point: DesignPoint, n: int):
             f"no fold to start from: the rod at G = {G:.6g}, M = {M:.6g}, D = {D:.6g} has "
             f"{len(report.folds)} converged fold(s) with alpha in (0, 90] degrees, not the "
             "lower and upper pair (it is not bistable there; start from a bistable point)")
-    folds = [kinds["lower"], kinds["upper"]]
-    w0 = np.stack([np.concatenate([f.theta, f.null_vector, [math.radians(f.alpha_deg), 0.0]])
-                   for f in folds])
-    return w0, folds
+    return np.stack([np.concatenate([f.theta, f.null_vector, [math.radians(f.alpha_deg), 0.0]])
+                     for f in (kinds["lower"], kinds["upper"])])
 
 
 def _run(point, name, u_lo, u_hi, w0, directions, n, max_cusps):
@@ -411,7 +432,7 @@ def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) ->
     i = point.index(vary)
     to = check_target(point, vary, to)
     v0 = point.values[i]
-    w0, _ = _start(point, n)
+    w0 = _start(point, n)
     u_to = to / v0 - 1.0
     lo, hi = sorted((0.0, u_to))
     direction = math.copysign(1.0, u_to)
@@ -477,7 +498,7 @@ def trace_fold_curve(point: DesignPoint, vary: str, between: tuple[float, float]
     lo, hi = sorted(check_target(point, vary, b) for b in between)
     if not lo < v0 < hi:
         raise ParameterError(f"between: {vary} = {v0!r} must lie inside ({lo!r}, {hi!r})")
-    w0, _ = _start(point, n)
+    w0 = _start(point, n)
     runs, observed, disc, vary_map, base = _run(
         point, vary, lo / v0 - 1.0, hi / v0 - 1.0, w0[[0 if start == "lower" else 1]],
         [math.copysign(1.0, direction)], n, float(max_cusps))
@@ -512,7 +533,7 @@ def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> CurvePoint:
     # stop short of the magnet touching the rod (the clearance's last 1 %)
     u_lo = max(CUSP_SEARCH[0], (lo / v0 - 1.0) * 0.99 if lo > 0 else CUSP_SEARCH[0])
     u_hi = min(CUSP_SEARCH[1], (hi / v0 - 1.0) * 0.99 if math.isfinite(hi) else CUSP_SEARCH[1])
-    w0, _ = _start(point, n)
+    w0 = _start(point, n)
     runs, observed, disc, vary_map, base = _run(point, vary, u_lo, u_hi, w0[[0, 0]],
                                                 [1.0, -1.0], n, 1.0)
     found = []
