@@ -54,3 +54,31 @@ def test_a_set_without_folds_is_nan_not_a_number():
     alphas, converged = np.asarray(alphas), np.asarray(converged)
     assert not converged[0] and np.all(np.isnan(alphas[0]))
     assert converged[1] and np.all(np.isfinite(alphas[1]))
+
+
+def test_more_bracketing_cells_rescue_small_clearances():
+    """At these small clearances the first bracketing cells lie near q = 0 (the straight rod
+    nearly critical at alpha = 0) and lead both one-mode solves to the upper fold: with one
+    cell per end the pair is reported not converged; with four it is the pair of
+    locate_folds, and a map (design_map.solve_points) reports them bistable with those angles."""
+    import jax
+
+    from jaxrod.analysis import design_map
+    from jaxrod.analysis.batch import fold_pair_states
+    from jaxrod.analysis.fold_curves import DesignPoint
+    from jaxrod.discretise.planar import planar_discretisation
+
+    disc = planar_discretisation(12, "clamped")
+    rows = [(2.263, 2.263 * 0.0236 / 2.2, 1.1908), (1.760, 1.760 * 0.0236 / 2.2, 1.1872)]
+    for cells in (1, 4):
+        program = jax.jit(jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc, cells)))
+        z, converged, _ = program(*(np.array(c) for c in zip(*rows)))
+        converged = np.asarray(converged)
+        assert not converged.any() if cells == 1 else converged.all()
+    res = design_map.solve_points(DesignPoint.from_groups(*rows[0]), np.array(rows))
+    assert (res["reason"] == design_map.OK).all()
+    for i, (G, M, Di) in enumerate(rows):
+        ref = [f.alpha_deg for f in magnet.locate_folds(magnet.make_scene(G, M, Di), n=16).folds]
+        assert np.max(np.abs(np.degrees(np.asarray(z[i, :, -1])) - ref)) < 1e-8
+        assert abs(res["capture_deg"][i] - ref[0]) < 1e-8
+        assert abs(res["release_deg"][i] - ref[1]) < 1e-8
