@@ -56,6 +56,10 @@ class EnergyModel:
     def hessian(self, x, lam, args):
         raise NotImplementedError
 
+    def gradient_and_hessian(self, x, lam, args):
+        """(grad E, Hess E) at (x, lam) (one assembly where the two share their parts)."""
+        return self.gradient(x, lam, args), self.hessian(x, lam, args)
+
     def third(self, x, lam, args, phi):
         """D^3E(x)[phi] = d/de Hess E(x + e phi) at e = 0 (an m x m matrix)."""
         return jax.jvp(lambda z: self.hessian(z, lam, args), (x,), (phi,))[1]
@@ -65,26 +69,30 @@ class EnergyModel:
         lam = jnp.asarray(lam, x.dtype)
         return jax.jvp(lambda l: self.gradient(x, l, args), (lam,), (jnp.ones_like(lam),))[1]
 
-    def hessian_vector_lam(self, x, lam, args, phi):
-        """d/dlam (Hess E phi)."""
+    def linearisation(self, x, lam, args):
+        """(grad E, Hess E, d/dlam grad E) at (x, lam): the equilibrium residual and the
+        blocks of its Jacobian in (x, lam), from one assembly and one tangent in lam."""
         lam = jnp.asarray(lam, x.dtype)
-        return jax.jvp(lambda l: self.hessian(x, l, args) @ phi, (lam,),
-                       (jnp.ones_like(lam),))[1]
+        (F, H), (F_lam, _) = jax.jvp(lambda l: self.gradient_and_hessian(x, l, args), (lam,),
+                                     (jnp.ones_like(lam),))
+        return F, H, F_lam
 
     def hessian_and_gradient_lam(self, x, lam, args):
         """(Hess E, d/dlam grad E) at (x, lam): the bordered Jacobian's blocks."""
-        return self.hessian(x, lam, args), self.gradient_lam(x, lam, args)
+        _, H, F_lam = self.linearisation(x, lam, args)
+        return H, F_lam
 
     def fold_blocks(self, x, lam, args, phi):
-        """(H, F_lam, D^3E[phi], (H phi)_lam): the Moore-Spence Jacobian's blocks, from one
-        assembly of the Hessian and two tangents (phi, 0) and (0, 1) of it."""
+        """(grad E, H, F_lam, D^3E[phi], (H phi)_lam): the Moore-Spence residual's gradient
+        block and its Jacobian's blocks, from one assembly of (grad E, Hess E) and two
+        tangents (phi, 0) and (0, 1) of it."""
         lam = jnp.asarray(lam, x.dtype)
-        pair = lambda z, l: (self.hessian(z, l, args), self.gradient(z, l, args))
+        pair = lambda z, l: self.gradient_and_hessian(z, l, args)
         tx = jnp.stack([phi, jnp.zeros_like(phi)])
         tl = jnp.array([0.0, 1.0], x.dtype)
-        (H, _), (dH, dg) = jax.vmap(lambda a, b: jax.jvp(pair, (x, lam), (a, b)),
+        (F, H), (dg, dH) = jax.vmap(lambda a, b: jax.jvp(pair, (x, lam), (a, b)),
                                     out_axes=(None, 0))(tx, tl)
-        return H, dg[1], dH[0], dH[1] @ phi
+        return F, H, dg[1], dH[0], dH[1] @ phi
 
 
 @dataclasses.dataclass(frozen=True)
@@ -150,26 +158,40 @@ class Structured(EnergyModel):
             e = e + scene.endpoint(self._tip(scene, a, w))
         return e
 
-    def _local(self, scene, a, w, s):
-        """l_j(a) = w_j [rho(a, s_j) + g . chi(a)] with g = grad Psi(X) held fixed, and X."""
+    def _local(self, scene, a, w):
+        """l_j(a) = w_j [rho(a, s_j) + g . chi(a)] with g = grad Psi(X) held fixed, X, and
+        Psi''(X) (None, None, None without an endpoint term)."""
         if scene.tip_map is None:
-            return lambda aj, sj, wj: wj * scene.density(aj, sj), None
+            return (lambda aj, sj, wj: wj * scene.density(aj, sj)), None, None
         X = self._tip(scene, a, w)
-        g = jax.grad(scene.endpoint)(X)
+        P, g = _hessian_and_gradient(scene.endpoint)(X)
         return (lambda aj, sj, wj: wj * (scene.density(aj, sj)
-                                         + jnp.dot(g, scene.tip_map(aj)))), X
+                                         + jnp.dot(g, scene.tip_map(aj)))), X, P
 
     def gradient(self, x, lam, args):
         scene, L, a, w, s = self._setup(x, lam, args)
-        local, _ = self._local(scene, a, w, s)
+        local, _, _ = self._local(scene, a, w)
         return jnp.einsum("jrm,jr->m", L, jax.vmap(jax.grad(local))(a, s, w))
 
     def hessian(self, x, lam, args):
+        return self.gradient_and_hessian(x, lam, args)[1]
+
+    def gradient_and_hessian(self, x, lam, args):
         scene, L, a, w, s = self._setup(x, lam, args)
-        local, X = self._local(scene, a, w, s)
-        H = _sandwich(L, jax.vmap(jax.jacfwd(jax.jacfwd(local)))(a, s, w))
+        local, X, P = self._local(scene, a, w)
+        h, g = jax.vmap(_hessian_and_gradient(local))(a, s, w)  # (nq, r, r), (nq, r)
+        F = jnp.einsum("jrm,jr->m", L, g)
+        H = _sandwich(L, h)
         if X is not None:
             chi_a = jax.vmap(jax.jacfwd(scene.tip_map))(a)  # (nq, k, r)
             B = jnp.einsum("j,jkr,jrm->km", w, chi_a, L)
-            H = H + B.T @ jax.jacfwd(jax.jacfwd(scene.endpoint))(X) @ B
-        return H
+            H = H + B.T @ P @ B
+        return F, H
+
+
+def _hessian_and_gradient(f):
+    """a -> (Hess f(a), grad f(a)) by forward over reverse mode, one pass (first argument)."""
+    def both(a, *rest):
+        v = jax.grad(f)(a, *rest)
+        return v, v
+    return jax.jacfwd(both, has_aux=True)

@@ -3,14 +3,15 @@ compilation cache.
 
 JAX's persistent compilation cache skips XLA's compilation in a later process, but not the
 tracing of the Python function into a program, which for the continuation and fold programs
-takes seconds. A ``StoredProgram`` behaves as ``jax.jit(fn)``; when a store is enabled
+takes seconds. A ``StoredProgram`` behaves as ``jaxrod.programs.jit(fn)``; when a store is enabled
 (the command line enables one next to its compilation cache) it also serialises the traced
 program (``jax.export``) on its first call for each input structure, and a later process
 deserialises it instead of tracing. Files are keyed by the program's name, the jaxrod and jax
 versions (and the package's source files, so that an edited installation never runs an old
 program), the backend, the static arguments and the input tree with its shapes and dtypes;
 a missing, unreadable or stale file falls back to tracing (and is rewritten). Inside another
-trace (jit, vmap, grad of the caller) the plain ``jax.jit`` function is used.
+trace (jit, vmap, grad of the caller) the plain jitted function is used. Stored programs are
+compiled with the same XLA options as the others (``jaxrod.programs``).
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ from pathlib import Path
 
 import jax
 import numpy as np
+
+from jaxrod.programs import jit
 
 _store: list[Path | None] = [None]
 
@@ -57,11 +60,11 @@ def _source_fingerprint() -> str:
 
 
 class StoredProgram:
-    """``jax.jit(fn, static_argnames)`` whose traced programs persist in the store."""
+    """``jaxrod.programs.jit(fn, static_argnames)`` whose traced programs persist in the store."""
 
     def __init__(self, name: str, fn: Callable, static_argnames: tuple[str, ...] = ()):
         self.name = name
-        self.jitted = jax.jit(fn, static_argnames=static_argnames)
+        self.jitted = jit(fn, static_argnames=static_argnames)
         self._fn = fn
         self._signature = inspect.signature(fn)
         self._static = static_argnames
@@ -81,8 +84,8 @@ class StoredProgram:
         key = self._key(tree, leaves, static)
         entry = self._loaded.get(key) or self._read(key) or self._export(key, tree, leaves,
                                                                            static)
-        exported, out_tree = entry
-        return jax.tree_util.tree_unflatten(out_tree, exported.call(*leaves))
+        call, out_tree = entry
+        return jax.tree_util.tree_unflatten(out_tree, call(*leaves))
 
     def _key(self, tree, leaves, static) -> str:
         description = repr((self.name, _source_fingerprint(), jax.__version__,
@@ -98,7 +101,7 @@ class StoredProgram:
         try:
             blob = self._path(key).read_bytes()
             serialised, out_tree = pickle.loads(blob)
-            entry = (jax.export.deserialize(bytearray(serialised)), out_tree)
+            entry = (jit(jax.export.deserialize(bytearray(serialised)).call), out_tree)
         except Exception:  # missing, truncated or written by another version: trace again
             return None
         self._loaded[key] = entry
@@ -114,7 +117,7 @@ class StoredProgram:
             return out
 
         exported = jax.export.export(jax.jit(flat))(*leaves)
-        entry = (exported, out_trees[0])
+        entry = (jit(exported.call), out_trees[0])
         self._loaded[key] = entry
         blob = pickle.dumps((bytes(exported.serialize()), entry[1]))
         # write to a temporary file and rename it: a concurrent reader never sees half a file

@@ -77,13 +77,18 @@ def _both(model, reference, x, phi, lam, args):
     """Each quantity assembled and by plain autodiff of the whole energy, in one program."""
     E = reference.fn
     hess = lambda z, l: jax.hessian(E)(z, l, args)
-    H, g_lam, T, Hphi_lam = model.fold_blocks(x, lam, args, phi)
+    F, H, g_lam, T, Hphi_lam = model.fold_blocks(x, lam, args, phi)
+    F_lin, H_lin, g_lam_lin = model.linearisation(x, lam, args)
     return {
         "energy": (model.energy(x, lam, args), E(x, lam, args)),
         "gradient": (model.gradient(x, lam, args), jax.grad(E)(x, lam, args)),
         "hessian": (model.hessian(x, lam, args), hess(x, lam)),
         "third": (model.third(x, lam, args, phi), jax.jacfwd(lambda z: hess(z, lam) @ phi)(x)),
+        "fold gradient": (F, jax.grad(E)(x, lam, args)),
         "fold hessian": (H, hess(x, lam)),
+        "linearisation gradient": (F_lin, jax.grad(E)(x, lam, args)),
+        "linearisation hessian": (H_lin, hess(x, lam)),
+        "linearisation gradient_lam": (g_lam_lin, jax.jacfwd(jax.grad(E), 1)(x, lam, args)),
         "fold third": (T, jax.jacfwd(lambda z: hess(z, lam) @ phi)(x)),
         "gradient_lam": (g_lam, jax.jacfwd(jax.grad(E), 1)(x, lam, args)),
         "hessian_vector_lam": (Hphi_lam, jax.jacfwd(lambda l: hess(x, l) @ phi)(lam)),

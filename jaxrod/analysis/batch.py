@@ -25,14 +25,13 @@ solves land on the same fold or outside (0, 90] degrees, or where a solve fails:
 
 from __future__ import annotations
 
-import functools
-
 import jax
 import jax.numpy as jnp
 
 from jaxrod.analysis.reduction import normalised_mode
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import RANGES, ParameterError, check_degree
+from jaxrod.programs import jit
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers.folds import moore_spence_linearisation
 from jaxrod.solvers.newton import newton
@@ -244,7 +243,7 @@ def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64"):
     return fold_pairs_program(G, M, D, n=n, dtype=dtype)
 
 
-@functools.partial(jax.jit, static_argnames=("n", "dtype"))
+@jit(static_argnames=("n", "dtype"))
 def fold_pairs_program(G, M, D, n: int = 12, dtype: str = "float64"):
     """``fold_pairs`` without the input checks: the compiled program itself (``.lower``)."""
     disc = cast(planar_discretisation(n, "clamped"), dtype)

@@ -31,7 +31,6 @@ rod could touch, or without two folds, is rejected by the line search.
 
 from __future__ import annotations
 
-import functools
 from typing import NamedTuple
 
 import jax
@@ -42,6 +41,7 @@ from jaxrod.analysis.fold_curves import groups_of
 from jaxrod.analysis.magnet import fold_guesses, valid_groups
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import GROUP_NAMES, PHYSICAL_NAMES
+from jaxrod.programs import jit
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers.folds import differentiable_fold
 from jaxrod.solvers.least_squares import LeastSquaresResult, least_squares_run
@@ -231,7 +231,7 @@ def _solve(kind: str, problem: Problem, max_iter: int = 60) -> Solution:
 solve_program = StoredProgram("calibration", _solve, static_argnames=("kind", "max_iter"))
 
 
-@functools.partial(jax.jit, static_argnames=("kind", "max_iter"))
+@jit(static_argnames=("kind", "max_iter"))
 def solve_batch(kind: str, problems: Problem, max_iter: int = 60) -> Solution:
     """Many problems of one kind at once (vmapped; the leading axis of every array)."""
     return jax.vmap(lambda pr: _solve(kind, pr, max_iter))(problems)

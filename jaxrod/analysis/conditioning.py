@@ -24,6 +24,7 @@ import numpy as np
 
 from jaxrod.analysis.reduction import ReducedFold, reduced_function, reduced_state, reduction
 from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet
 from jaxrod.solvers.folds import moore_spence_residual
 from jaxrod.solvers.newton import newton
@@ -55,7 +56,7 @@ def _condition_numbers(q, alpha, red, scene, disc):
             "w_problem": cond(red.Z.T @ H @ red.Z), "reduced": cond(reduced)}
 
 
-_condition_batch = jax.jit(jax.vmap(_condition_numbers, in_axes=(0, 0, None, None, None)))
+_condition_batch = jit(jax.vmap(_condition_numbers, in_axes=(0, 0, None, None, None)))
 
 
 def conditioning_near_fold(scene: DipoleMagnet, fold: ReducedFold, n: int = 16,
@@ -79,7 +80,7 @@ def conditioning_near_fold(scene: DipoleMagnet, fold: ReducedFold, n: int = 16,
                      jnp.atleast_1d(a_star), None, tol=1e-14)
         return res.x[0], res.converged
 
-    alpha, ok = jax.jit(jax.vmap(alpha_at))(jnp.asarray(q))
+    alpha, ok = jit(jax.vmap(alpha_at))(jnp.asarray(q))
     if not bool(jnp.all(ok)):
         raise RuntimeError("conditioning_near_fold: F(q, alpha) = 0 not solved at every offset")
     cond = _condition_batch(jnp.asarray(q), alpha, red, scene, disc)

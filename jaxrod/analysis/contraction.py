@@ -38,6 +38,7 @@ from jaxrod import spectral
 from jaxrod.analysis.greenhill import principal_eigenpair
 from jaxrod.analysis.reduction import Reduction, mean_zero_basis, stiffness_matrix
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
+from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet, dipole_potential, magnet_direction
 
 #: Points of the dense grid on which the L-infinity norm of H is taken.
@@ -135,7 +136,7 @@ def _finite_or_none(v) -> float | None:
 
 
 #: ``contraction_constants`` over arrays of (q, alpha), compiled.
-contraction_constants_batch = jax.jit(
+contraction_constants_batch = jit(
     jax.vmap(contraction_constants, in_axes=(0, 0, None, None, None)))
 
 

@@ -64,6 +64,7 @@ from jaxrod.analysis.fold_curves import (
 from jaxrod.analysis.magnet import default_options, locate_folds
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import UNITS, ParameterError
+from jaxrod.programs import jit
 from jaxrod.progress import progress_bar
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers.continuation import continuation_run
@@ -202,8 +203,8 @@ def _retry_program(G, M, D, n):
     return jax.vmap(lambda g, m, d: _retry_one(g, m, d, disc))(G, M, D)
 
 
-_wider = jax.jit(_chunk_program, static_argnames=("n", "cells"))
-_retry = jax.jit(_retry_program, static_argnames=("n",))
+_wider = jit(_chunk_program, static_argnames=("n", "cells"))
+_retry = jit(_retry_program, static_argnames=("n",))
 
 
 def _bucketed(arrays):
@@ -222,8 +223,8 @@ def _per_device(devices: tuple, n: int):
     mesh = jax.sharding.Mesh(np.asarray(devices), ("points",))
     spec = jax.sharding.PartitionSpec("points")
     fn = functools.partial(_chunk_program, n=n)
-    return jax.jit(jax.shard_map(fn, mesh=mesh, in_specs=(spec, spec, spec),
-                                 out_specs=(spec, spec), check_vma=False)), mesh
+    return jit(jax.shard_map(fn, mesh=mesh, in_specs=(spec, spec, spec),
+                             out_specs=(spec, spec), check_vma=False)), mesh
 
 
 def _sharded(arrays, mesh):

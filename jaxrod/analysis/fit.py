@@ -67,6 +67,7 @@ from jaxrod.params import (
     check_value,
     preset,
 )
+from jaxrod.programs import jit
 from jaxrod.progress import Interrupted, progress_bar
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers.folds import differentiable_fold
@@ -164,7 +165,7 @@ def _fit_core(measured, mask, sigma, fit_offset, setup: FitSetup, log_e0, max_it
 
 
 _fit_jit = StoredProgram("fit", _fit_core, static_argnames=("max_iter",))
-_fit_batch_jit = jax.jit(jax.vmap(_fit_core, in_axes=(0, 0, None, None, None, None)))
+_fit_batch_jit = jit(jax.vmap(_fit_core, in_axes=(0, 0, None, None, None, None)))
 
 
 def _parse(measured, sigma_deg):
@@ -297,7 +298,7 @@ def loss_profile(measured, E_values, sigma_deg: float = 1.0, fit_offset: bool = 
         r = jnp.where(mask, (d - delta) / sigma_deg, 0.0)
         return jnp.where(ok, 0.5 * jnp.sum(r**2), jnp.nan)
 
-    return np.asarray(jax.jit(jax.vmap(at))(jnp.log(jnp.asarray(E_values, jnp.float64))))
+    return np.asarray(jit(jax.vmap(at))(jnp.log(jnp.asarray(E_values, jnp.float64))))
 
 
 # --- several parameters: calibration of the experiment on physical inputs -------------------

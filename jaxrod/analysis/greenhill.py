@@ -41,6 +41,7 @@ import numpy as np
 
 from jaxrod.discretise.planar import PlanarDiscretisation, check_support, planar_discretisation
 from jaxrod.params import ParameterError, Rod, check, check_degree
+from jaxrod.programs import jit
 from jaxrod.scenes.uniform import UniformField
 from jaxrod.solvers.newton import newton
 
@@ -109,7 +110,7 @@ def pitchfork_coefficients(G, disc: PlanarDiscretisation):
     return beta0, a2_quartic, a2_gradient
 
 
-@jax.jit
+@jit
 def _greenhill_load(disc: PlanarDiscretisation):
     K = _straight_hessian(0.0, disc)
     W = K - _straight_hessian(1.0, disc)  # matrix of int (1 - s) u^2 (SPD)
@@ -222,7 +223,7 @@ def greenhill(G: float, support: str = "clamped", A: float | None = None,
                            stable=stable)
 
 
-_pitchfork_jit = jax.jit(pitchfork_coefficients)
+_pitchfork_jit = jit(pitchfork_coefficients)
 
 
 def stability_curve(G_values, support: str = "clamped", n: int | None = None):
@@ -238,14 +239,14 @@ def stability_curve(G_values, support: str = "clamped", n: int | None = None):
     return -np.asarray(beta0), np.asarray(a2)
 
 
-_pitchfork_batch = jax.jit(jax.vmap(pitchfork_coefficients, in_axes=(0, None)))
+_pitchfork_batch = jit(jax.vmap(pitchfork_coefficients, in_axes=(0, None)))
 
 
 def _a2_residual(x, disc):
     return jnp.atleast_1d(pitchfork_coefficients(x[0], disc)[1])
 
 
-@jax.jit
+@jit
 def _solve_a2_zero(g0, disc):
     # A2 carries round-off ~ eps ||H|| / gap ~ 1e-12..1e-11 from the eigenvector (||H|| ~ n^4),
     # so |A2| <= 1e-10 is the honest stopping test (an error in G of ~5e-10).
@@ -281,7 +282,7 @@ def _stability_margin(x, args):
     return jnp.atleast_1d((a_per_l2 * L**2 + beta0) / G)
 
 
-@jax.jit
+@jit
 def _solve_critical_log_length(x0, g_per_l3, a_per_l2, disc):
     return newton(_stability_margin, jnp.atleast_1d(x0), (g_per_l3, a_per_l2, disc), tol=1e-15)
 

@@ -14,7 +14,6 @@ Everything is in radians internally; results carry degrees where the name says `
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 
 import jax
@@ -24,6 +23,7 @@ import numpy as np
 from jaxrod.analysis.branch import Branch, branch_from_runs
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import RANGES, check, check_degree, check_track_clearance
+from jaxrod.programs import jit
 from jaxrod.progress import Interrupted
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle, tip_position
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
@@ -63,7 +63,7 @@ def _observables_of(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisatio
     return jax.vmap(one)(theta, alpha)
 
 
-_observables = jax.jit(_observables_of)
+_observables = jit(_observables_of)
 
 
 def default_options(max_points: int = 400) -> ContinuationOptions:
@@ -107,14 +107,14 @@ def _alpha_jacobian(theta, args):
     return ALPHA_MODEL.hessian(theta, alpha, (scene, disc))
 
 
-@jax.jit
+@jit
 def _equilibrium(theta0, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
     """Newton for the equilibrium at magnet angle alpha from theta0 (compiled once)."""
     return newton(_alpha_residual, theta0, (alpha, scene, disc), tol=1e-13,
                   jacobian=_alpha_jacobian)
 
 
-@jax.jit
+@jit
 def _relax(theta0, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
     """Energy descent to a local minimum at magnet angle alpha (compiled once)."""
     return descend(ALPHA_MODEL, theta0, (scene, disc), lam=alpha)
@@ -180,7 +180,7 @@ class Fold:
         }
 
 
-@jax.jit
+@jit
 def _fold_report(x, alpha, phi, scene: DipoleMagnet, disc: PlanarDiscretisation):
     args = (scene, disc)
     d_alpha, d_qq, phi_q = fold_coefficients(ALPHA_MODEL, x, alpha, phi, args, disc.mean)
@@ -257,7 +257,7 @@ def valid_groups(G, M, D):
             & RANGES["D"].contains(D))
 
 
-@functools.partial(jax.jit, static_argnames=("n", "tol"))
+@jit(static_argnames=("n", "tol"))
 def _fold_angles_program(G, M, D, n: int, tol: float):
     valid = valid_groups(G, M, D)
     G, M, D = (jnp.where(valid, v, x) for v, x in zip((G, M, D), (1.0, 0.0, 2.0)))
@@ -417,7 +417,7 @@ def _follow_step(carry, alpha, scene, disc):
     return theta, (theta, ~followed, ok)
 
 
-@jax.jit
+@jit
 def _sweep(theta0, alphas, scene, disc):
     return jax.lax.scan(lambda c, a: _follow_step(c, a, scene, disc), theta0, alphas)
 

@@ -25,7 +25,6 @@ snaps off where a(t) reaches the planar upper fold angle, whatever the track.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 
 import jax
@@ -34,6 +33,7 @@ import numpy as np
 
 from jaxrod.discretise.director import DirectorDiscretisation, director_discretisation
 from jaxrod.params import check, check_degree
+from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet
 from jaxrod.scenes.three_d import DipoleMagnet3D, magnet_position
 from jaxrod.solvers.continuation import STATUS_MESSAGES, ContinuationOptions, continuation_run
@@ -85,7 +85,7 @@ def _tip(x, disc: DirectorDiscretisation):
     return disc.integrate(d3.T)
 
 
-@functools.partial(jax.jit, static_argnames="capacity")
+@jit(static_argnames="capacity")
 def _trace(scene: DipoleMagnet, track: GreatCircleTrack, disc: DirectorDiscretisation,
            options: ContinuationOptions, capacity: int):
     args = (scene, track, disc)
@@ -96,7 +96,7 @@ def _trace(scene: DipoleMagnet, track: GreatCircleTrack, disc: DirectorDiscretis
     return start, raw, jax.vmap(lambda x: _tip(x, disc))(jnp.nan_to_num(raw.x))
 
 
-@jax.jit
+@jit
 def _refine(x0, t0, scene: DipoleMagnet, track: GreatCircleTrack, disc: DirectorDiscretisation):
     args = (scene, track, disc)
     H = jax.hessian(track_energy)(x0, t0, args)

@@ -25,6 +25,7 @@ import jax.numpy as jnp
 
 from jaxrod.discretise.director import director_discretisation
 from jaxrod.discretise.planar import PlanarDiscretisation
+from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet, dipole_potential, magnet_direction
 from jaxrod.scenes.three_d import DipoleMagnet3D, magnet_position
 
@@ -82,7 +83,7 @@ def out_of_plane(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation) 
     }
 
 
-out_of_plane_batch = jax.jit(jax.vmap(out_of_plane, in_axes=(0, 0, None, None)))
+out_of_plane_batch = jit(jax.vmap(out_of_plane, in_axes=(0, 0, None, None)))
 
 
 def branch_verdict(scene: DipoleMagnet, branch, folds=(), n: int | None = None) -> dict:

@@ -39,6 +39,7 @@ import numpy as np
 from jaxrod.analysis.greenhill import principal_eigenpair
 from jaxrod.discretise.director import DirectorDiscretisation, director_discretisation
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
+from jaxrod.programs import jit
 from jaxrod.scenes.three_d import UniformField3D
 from jaxrod.scenes.uniform import UniformField
 from jaxrod.solvers.newton import newton
@@ -93,7 +94,7 @@ def _critical_modes(G, disc, phi):
     return -beta0, u, None
 
 
-@jax.jit
+@jit
 def _trace(G, amplitudes, disc: PlanarDiscretisation | DirectorDiscretisation, phi):
     a_crit, k, k_perp = _critical_modes(G, disc, phi)
     tail = jnp.array([a_crit]) if k_perp is None else jnp.array([a_crit, 0.0])

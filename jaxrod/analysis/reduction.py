@@ -49,6 +49,7 @@ import numpy as np
 
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import ParameterError
+from jaxrod.programs import jit
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
 from jaxrod.scenes.terms import bending_energy
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
@@ -190,8 +191,7 @@ def _jet(theta, xi, theta_alpha, alpha, red: Reduction, scene, disc):
     with g = grad E, H = Hess E. The terms with d_q xi and d_alpha xi drop out because they
     lie in Y and H xi is orthogonal to Y (one assembly of the Hessian, two tangents of it)."""
     args = (scene, disc)
-    g = ALPHA_MODEL.gradient(theta, alpha, args)
-    H, g_alpha, T, Hxi_alpha = ALPHA_MODEL.fold_blocks(theta, alpha, args, xi)
+    g, H, g_alpha, T, Hxi_alpha = ALPHA_MODEL.fold_blocks(theta, alpha, args, xi)
     Txi = T @ xi
     return jnp.stack([jnp.dot(red.psi, g), xi @ H @ xi,
                       jnp.dot(red.psi, H @ theta_alpha + g_alpha), jnp.dot(Txi, xi),
@@ -301,7 +301,7 @@ def _reduced_fold_pair(scene: DipoleMagnet, disc: PlanarDiscretisation, tol):
     return found, one, full, derivs, tip, inner, theta, red
 
 
-_reduced_fold_pair_jit = jax.jit(_reduced_fold_pair)
+_reduced_fold_pair_jit = jit(_reduced_fold_pair)
 
 
 @dataclasses.dataclass(frozen=True)

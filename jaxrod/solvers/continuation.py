@@ -29,6 +29,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrod.derivatives import EnergyModel, as_model
+from jaxrod.programs import jit
 from jaxrod.solvers.newton import newton
 
 RUNNING, REACHED_BOUND, CAPACITY_FULL, STEP_TOO_SMALL, FOLDS_FOUND = 0, 1, 2, 3, 4
@@ -79,35 +80,37 @@ def _wdot(a, b, m):
     return jnp.dot(a[:-1], b[:-1]) / m + a[-1] * b[-1]
 
 
-def _bordered(model: EnergyModel, y, t, args):
-    """[F_x F_lam; t^T W] at y (the Jacobian of the corrector system), and F_x."""
-    m = y.shape[0] - 1
-    H, g_lam = model.hessian_and_gradient_lam(y[:-1], y[-1], args)
-    w = jnp.append(jnp.full(m, 1.0 / m), 1.0)
-    return jnp.vstack([jnp.hstack([H, g_lam[:, None]]), (w * t)[None, :]]), H
+def _bordered(H, g_lam, t):
+    """[F_x F_lam; t^T W], the Jacobian of the corrector system."""
+    m = H.shape[0]
+    w = jnp.append(jnp.full(m, 1.0 / m, H.dtype), 1.0)
+    return jnp.vstack([jnp.hstack([H, g_lam[:, None]]), (w * t)[None, :]])
 
 
-def _corrector_residual(z, data):
+def _corrector(z, data):
+    """The corrector's residual [F; <t, z - y_pred>] and its Jacobian, from one assembly."""
     model, y_pred, t, args = data
     m = z.shape[0] - 1
-    F = model.gradient(z[:-1], z[-1], args)
-    return jnp.append(F, _wdot(t, z - y_pred, m))
+    F, H, g_lam = model.linearisation(z[:-1], z[-1], args)
+    return jnp.append(F, _wdot(t, z - y_pred, m)), _bordered(H, g_lam, t)
 
 
-def _corrector_jacobian(z, data):
-    model, _, t, args = data
-    return _bordered(model, z, t, args)[0]
+def _unit_tangent(B, m):
+    """The solution t of B t = e_last, scaled to <t, t> = 1."""
+    t = jnp.linalg.solve(B, jnp.zeros(B.shape[0], B.dtype).at[-1].set(1.0))
+    return t / jnp.sqrt(_wdot(t, t, m))
 
 
 def initial_tangent(energy: Energy, x0, lam0, args, direction: float = 1.0):
     """Unit tangent at a regular point, oriented so that d lam has the sign of ``direction``."""
-    y = jnp.append(x0, lam0)
-    e = jnp.zeros_like(y).at[-1].set(1.0)
-    B, _ = _bordered(as_model(energy), y, e, args)
-    rhs = jnp.zeros_like(y).at[-1].set(1.0)
-    t = jnp.linalg.solve(B, rhs)
-    t = t / jnp.sqrt(_wdot(t, t, y.shape[0] - 1))
-    return jnp.sign(direction) * t
+    _, H, g_lam = as_model(energy).linearisation(x0, lam0, args)
+    return _oriented_tangent(H, g_lam, direction)
+
+
+def _oriented_tangent(H, g_lam, direction):
+    m = H.shape[0]
+    e = jnp.zeros(m + 1, H.dtype).at[-1].set(1.0)
+    return jnp.sign(direction) * _unit_tangent(_bordered(H, g_lam, e), m)
 
 
 class _State(NamedTuple):
@@ -144,7 +147,8 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
     model = as_model(energy)
     m = x0.shape[0]
     y0 = jnp.append(x0, lam0)
-    t0 = initial_tangent(model, x0, lam0, args, direction)
+    F0, H0, g_lam0 = model.linearisation(x0, lam0, args)
+    t0 = _oriented_tangent(H0, g_lam0, direction)
     nan = jnp.full(capacity, jnp.nan)
     out = RawBranch(
         x=jnp.full((capacity, m), jnp.nan), lam=nan, tangent_lam=nan, min_eig=nan,
@@ -161,16 +165,15 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
             newton_iterations=out.newton_iterations.at[k].set(iters),
             residual_norm=out.residual_norm.at[k].set(res))
 
-    F0 = jnp.max(jnp.abs(model.gradient(x0, lam0, args)))
-    out = record(out, 0, y0, t0, model.hessian(x0, lam0, args), 0, F0)
+    out = record(out, 0, y0, t0, H0, 0, jnp.max(jnp.abs(F0)))
 
     def step(s: _State) -> _State:
         y_pred = s.y + s.ds * s.t
-        res = newton(_corrector_residual, y_pred, (model, y_pred, s.t, args), tol=opts.tol,
-                     jacobian=_corrector_jacobian)
-        B, H = _bordered(model, res.x, s.t, args)
-        t_new = jnp.linalg.solve(B, jnp.zeros_like(s.y).at[-1].set(1.0))
-        t_new = t_new / jnp.sqrt(_wdot(t_new, t_new, m))
+        res = newton(None, y_pred, (model, y_pred, s.t, args), tol=opts.tol,
+                     linearise=_corrector, keep_jacobian=True)
+        B = res.jacobian  # the corrector's Jacobian at its solution: [H F_lam; t^T W]
+        H = B[:m, :m]
+        t_new = _unit_tangent(B, m)
         turn_ok = _wdot(t_new, s.t, m) > 0.9
         accept = res.converged & turn_ok & jnp.all(jnp.isfinite(t_new))
         k = s.k + jnp.where(accept, 1, 0)
@@ -199,4 +202,4 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
                               rejected_steps=final.rejected)
 
 
-_pseudo_arclength = jax.jit(continuation_run, static_argnums=(0, 5))
+_pseudo_arclength = jit(continuation_run, static_argnums=(0, 5))

@@ -67,8 +67,7 @@ def moore_spence_linearisation(z, data):
     model = as_model(energy)
     m = ell.shape[0]
     x, phi, lam = z[:m], z[m:2 * m], z[-1]
-    H, g_lam, T, Hphi_lam = model.fold_blocks(x, lam, args, phi)
-    F = model.gradient(x, lam, args)
+    F, H, g_lam, T, Hphi_lam = model.fold_blocks(x, lam, args, phi)
     R = jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
     zero = jnp.zeros_like(H)
     top = jnp.hstack([H, zero, g_lam[:, None]])

@@ -46,6 +46,8 @@ class NewtonResult(NamedTuple):
     residual_norm: jax.Array
     iterations: jax.Array
     status: jax.Array
+    #: dF/dx at ``x`` when asked for (``keep_jacobian``), else None
+    jacobian: jax.Array | None = None
 
     def message(self) -> str:
         """Human-readable status (host side)."""
@@ -60,6 +62,7 @@ class _State(NamedTuple):
     k: jax.Array  # Newton steps taken
     done: jax.Array
     status: jax.Array
+    jac: jax.Array | None  # dF/dx at x (with keep_jacobian)
 
 
 def _norm(v):
@@ -71,7 +74,7 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
            max_halvings: int = 12, stall_xtol: float = 1e-7,
            jacobian: Callable[[jax.Array, Any], jax.Array] | None = None,
            linearise: Callable[[jax.Array, Any], tuple[jax.Array, jax.Array]] | None = None,
-           ) -> NewtonResult:
+           keep_jacobian: bool = False) -> NewtonResult:
     """Solve ``residual(x, args) = 0`` from ``x0`` (square system, x a 1-D array).
 
     Args:
@@ -89,12 +92,17 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
       linearise: ``linearise(x, args)`` = (F, dF/dx) in one evaluation (where the two share
         their expensive parts); replaces ``residual`` (which may then be None) and
         ``jacobian``. The Jacobian is then also formed at a rejected trial point (rare).
+      keep_jacobian: return dF/dx at the final x in ``jacobian`` (needs ``linearise``), so
+        that a caller that needs it there (a continuation's tangent, a stability test) does
+        not assemble it again.
 
     The loop evaluates F at one place and the Jacobian at one other (each pass tries one
     step length), or both at one place with ``linearise``, so the compiled program holds one
     copy of each.
     """
     x0 = jnp.asarray(x0)
+    if keep_jacobian and linearise is None:
+        raise ValueError("keep_jacobian needs linearise")
     if not jnp.issubdtype(x0.dtype, jnp.floating):
         x0 = x0.astype(jnp.float64)  # float32 input stays float32 (tolerances are the caller's)
     # evaluate(x) = (F(x), J): J as a thunk, formed only inside the branch that solves with it
@@ -143,13 +151,17 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         done = converged_here | at_floor | exhausted | bad_direction | (first & ~finite) \
             | (move & (k >= max_steps))
         t = jnp.where(move, jnp.ones((), dtype), 0.5 * s.t)
-        return _State(x, fnorm, dx, t, k, done, status)
+        jac = jnp.where(move, jac_at(), s.jac) if keep_jacobian else None
+        return _State(x, fnorm, dx, t, k, done, status, jac)
 
+    m = x0.shape[0]
     init = _State(x0, jnp.asarray(jnp.inf, dtype), jnp.zeros_like(x0), jnp.zeros((), dtype),
-                  jnp.asarray(-1), jnp.asarray(False), jnp.asarray(MAX_STEPS))
+                  jnp.asarray(-1), jnp.asarray(False), jnp.asarray(MAX_STEPS),
+                  jnp.zeros((m, m), dtype) if keep_jacobian else None)
     final = jax.lax.while_loop(lambda s: ~s.done, step, init)
     converged = final.status == CONVERGED
-    return NewtonResult(final.x, converged, final.fnorm, jnp.maximum(final.k, 0), final.status)
+    return NewtonResult(final.x, converged, final.fnorm, jnp.maximum(final.k, 0), final.status,
+                        final.jac)
 
 
 def implicit_newton(residual: Callable[[jax.Array, Any], jax.Array] | None, x0: jax.Array,
