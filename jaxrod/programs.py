@@ -41,11 +41,12 @@ def compiler_options() -> dict:
 
 
 def _inside_a_trace() -> bool:
-    """Whether a call made now is traced (into an enclosing jit, or under vmap or grad)
-    rather than run at the top level; True where jax does not say (always safe)."""
+    """Whether a call made now is staged into an enclosing program (jit, scan, export), where
+    jax takes compiler options only from the outermost program; True where jax does not say
+    (a plain nested jit is always valid). Under a top-level grad or vmap it is False."""
     try:
         from jax._src import core
-        return not core.trace_state_clean()
+        return core.unsafe_am_i_under_a_jit()
     except (ImportError, AttributeError):
         return True
 
@@ -53,9 +54,9 @@ def _inside_a_trace() -> bool:
 class Program:
     """``jax.jit(fn, **kwargs)`` compiled with ``compiler_options()``, built on first use.
 
-    Called at the top level it compiles with the options; inside another trace (jit, vmap,
-    grad), where jax takes compiler options only from the outermost program, it is a plain
-    nested ``jax.jit``. ``lower`` and every other attribute go to the top-level function.
+    Called at the top level (also under a top-level grad or vmap) it compiles with the
+    options; staged into another program it is a plain nested ``jax.jit``. ``lower`` and
+    every other attribute go to the top-level function.
     """
 
     def __init__(self, fn: Callable, **kwargs):

@@ -28,7 +28,12 @@ from jaxrod.progress import Interrupted
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle, tip_position
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.descent import descend
-from jaxrod.solvers.folds import differentiable_fold, fold_coefficients, moore_spence_solve
+from jaxrod.solvers.folds import (
+    FoldPoint,
+    coefficients_at_fold,
+    differentiable_fold,
+    moore_spence_solve,
+)
 from jaxrod.solvers.newton import newton
 from jaxrod.stored import StoredProgram
 
@@ -85,13 +90,12 @@ def figure_options() -> ContinuationOptions:
 
 def _diagram_program(scene: DipoleMagnet, disc: PlanarDiscretisation,
                      options: ContinuationOptions, capacity: int):
-    start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc),
-                   jacobian=_alpha_jacobian)
-    trace = lambda d: continuation_run(ALPHA_MODEL, start.x, 0.0, (scene, disc), options,
-                                       capacity, d)
+    # the straight rod is an equilibrium at alpha = 0 (mirror symmetry; see fold_guesses)
+    trace = lambda d: continuation_run(ALPHA_MODEL, jnp.zeros(disc.size), 0.0, (scene, disc),
+                                       options, capacity, d)
     runs = jax.vmap(trace)(jnp.array([-1.0, 1.0]))
     observed = jax.vmap(lambda th, a: _observables_of(th, a, scene, disc))(runs.x, runs.lam)
-    return start, runs, observed
+    return runs, observed
 
 
 _diagram = StoredProgram("magnet-diagram", _diagram_program, static_argnames=("capacity",))
@@ -132,11 +136,12 @@ def trace_diagram(scene: DipoleMagnet, n: int = DEFAULT_N,
     """
     disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     options = options or default_options()
-    start, runs, observed = _diagram(scene, disc, options._replace(max_points=0),
-                                     options.max_points)
-    if not bool(start.converged):
-        raise RuntimeError(f"no equilibrium at alpha = 0: {start.message()}")
-    runs, observed = jax.device_get((runs, observed))  # index on the host
+    runs, observed = jax.device_get(  # index on the host
+        _diagram(scene, disc, options._replace(max_points=0), options.max_points))
+    if not np.all(runs.residual_norm[:, 0] <= options.tol):
+        raise RuntimeError("the straight rod is not an equilibrium at alpha = 0 (residual "
+                           f"{np.max(runs.residual_norm[:, 0]):.3g}): the scene is not "
+                           "mirror-symmetric there")
     left, right = (jax.tree_util.tree_map(lambda v, i=i: v[i], (runs, observed))
                    for i in (0, 1))
     return branch_from_runs([(left[0], True, left[1]), (right[0], False, right[1])])
@@ -180,15 +185,17 @@ class Fold:
         }
 
 
-@jit
-def _fold_report(x, alpha, phi, scene: DipoleMagnet, disc: PlanarDiscretisation):
-    args = (scene, disc)
-    d_alpha, d_qq, phi_q = fold_coefficients(ALPHA_MODEL, x, alpha, phi, args, disc.mean)
+def _fold_report(fp: FoldPoint, disc: PlanarDiscretisation):
+    """The normal form and stability data of a converged fold, from its Moore-Spence
+    Jacobian (no new assembly)."""
+    x, J = fp.x, fp.newton.jacobian
+    d_alpha, d_qq, phi_q = coefficients_at_fold(J, fp.null_vector, disc.mean)
     c = -d_qq / (2.0 * d_alpha)
     X = tip_position(x, disc)
     V = jax.jvp(lambda th: tip_position(th, disc), (x,), (phi_q,))[1]
     T = (X[1] * V[0] - X[0] * V[1]) / jnp.dot(X, X)
-    eigs = jnp.linalg.eigvalsh(ALPHA_MODEL.hessian(x, alpha, args))
+    m = x.shape[0]
+    eigs = jnp.linalg.eigvalsh(J[:m, :m])
     return (d_alpha, d_qq, c, c / T**2, disc.mean(x), tip_angle(x, disc), eigs[:2], phi_q)
 
 
@@ -196,7 +203,7 @@ def _refine_one(theta0, alpha0, scene, disc, tol):
     args = (scene, disc)
     _, V = jnp.linalg.eigh(ALPHA_MODEL.hessian(theta0, alpha0, args))
     fp = moore_spence_solve(ALPHA_MODEL, theta0, alpha0, V[:, 0], args, tol)
-    return fp, _fold_report(fp.x, fp.lam, fp.null_vector, scene, disc)
+    return fp, _fold_report(fp, disc)
 
 
 def _refine_program(theta0, alpha0, scene, disc, tol):
@@ -208,21 +215,23 @@ _refine_batch = StoredProgram("magnet-refine", _refine_program)
 
 
 def fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
-    """Approximate folds from a one-sided continuation that stops after the second fold."""
+    """Approximate folds from a one-sided continuation that stops after the second fold:
+    (states, angles, null-vector guesses, found).
+
+    It starts from the straight rod at alpha = 0, an equilibrium for every (G, M, D) by the
+    mirror symmetry theta -> -theta of E_perm at alpha = 0 (no Newton solve needed; the run
+    records its residual there). At the recorded point nearest each fold the state part of
+    the branch's tangent is the null-vector guess (at the fold it is the Hessian's kernel).
+    """
     options = default_options(0)._replace(max_folds=2.0, lam_min=-0.1)
-    start = newton(_alpha_residual, jnp.zeros(disc.size), (0.0, scene, disc),
-                   jacobian=_alpha_jacobian)
-    raw = continuation_run(ALPHA_MODEL, start.x, 0.0, (scene, disc), options,
+    raw = continuation_run(ALPHA_MODEL, jnp.zeros(disc.size), 0.0, (scene, disc), options,
                            FOLD_PAIR_CAPACITY, 1.0)
     t = raw.tangent_lam
     change = t[:-1] * t[1:] < 0.0
     i = jnp.nonzero(change, size=2, fill_value=0)[0]
     j = jnp.where(jnp.abs(t[i]) <= jnp.abs(t[i + 1]), i, i + 1)
-    hess = jax.vmap(ALPHA_MODEL.hessian, in_axes=(0, 0, None))(raw.x[j], raw.lam[j],
-                                                                (scene, disc))
-    phi0 = jax.vmap(lambda H: jnp.linalg.eigh(H)[1][:, 0])(hess)
-    found = start.converged & (jnp.sum(change) >= 2)
-    return raw.x[j], raw.lam[j], phi0, found
+    found = (raw.residual_norm[0] <= options.tol) & (jnp.sum(change) >= 2)
+    return raw.x[j], raw.lam[j], raw.tangent_x[j], found
 
 
 FOLD_PAIR_CAPACITY = 128

@@ -102,8 +102,8 @@ def _refine(x0, t0, scene: DipoleMagnet, track: GreatCircleTrack, disc: Director
     H = jax.hessian(track_energy)(x0, t0, args)
     _, V = jnp.linalg.eigh(H)
     fold = moore_spence_solve(track_energy, x0, t0, V[:, 0], args)
-    return fold, _tip(fold.x, disc), jnp.linalg.eigvalsh(jax.hessian(track_energy)(
-        fold.x, fold.lam, args))[:2]
+    m = x0.shape[0]  # the Hessian at the fold: the first block of its Moore-Spence Jacobian
+    return fold, _tip(fold.x, disc), jnp.linalg.eigvalsh(fold.newton.jacobian[:m, :m])[:2]
 
 
 @dataclasses.dataclass(frozen=True)

@@ -67,6 +67,8 @@ class RawBranch(NamedTuple):
     x: jax.Array  # (capacity, m)
     lam: jax.Array  # (capacity,)
     tangent_lam: jax.Array  # (capacity,)
+    tangent_x: jax.Array  # (capacity, m): the state part of the unit tangent (near a fold,
+    #                       the null vector of the Hessian)
     min_eig: jax.Array  # (capacity,)
     morse_index: jax.Array  # (capacity,)
     newton_iterations: jax.Array  # (capacity,)
@@ -151,7 +153,8 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
     t0 = _oriented_tangent(H0, g_lam0, direction)
     nan = jnp.full(capacity, jnp.nan)
     out = RawBranch(
-        x=jnp.full((capacity, m), jnp.nan), lam=nan, tangent_lam=nan, min_eig=nan,
+        x=jnp.full((capacity, m), jnp.nan), lam=nan, tangent_lam=nan,
+        tangent_x=jnp.full((capacity, m), jnp.nan), min_eig=nan,
         morse_index=jnp.full(capacity, -1), newton_iterations=jnp.full(capacity, -1),
         residual_norm=nan, num_points=jnp.asarray(0), status=jnp.asarray(RUNNING),
         rejected_steps=jnp.asarray(0))
@@ -160,7 +163,8 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
         lo, index = _spectrum(H)
         return out._replace(
             x=out.x.at[k].set(y[:-1]), lam=out.lam.at[k].set(y[-1]),
-            tangent_lam=out.tangent_lam.at[k].set(t[-1]), min_eig=out.min_eig.at[k].set(lo),
+            tangent_lam=out.tangent_lam.at[k].set(t[-1]),
+            tangent_x=out.tangent_x.at[k].set(t[:-1]), min_eig=out.min_eig.at[k].set(lo),
             morse_index=out.morse_index.at[k].set(index),
             newton_iterations=out.newton_iterations.at[k].set(iters),
             residual_norm=out.residual_norm.at[k].set(res))

@@ -128,8 +128,7 @@ def fold_linearisation(w, ell, model: EnergyModel, args_at: ArgsMap, args):
     (phi, 0, 0), (0, 1, 0) and (0, 0, 1) in (x, lam, u)."""
     m = ell.shape[0]
     x, phi, lam, u = split(w, m)
-    pair = lambda y, l, v: (model.hessian(y, l, args_at(v, args)),
-                            model.gradient(y, l, args_at(v, args)))
+    pair = lambda y, l, v: model.gradient_and_hessian(y, l, args_at(v, args))[::-1]
     zero = jnp.zeros_like(phi)
     tx = jnp.stack([phi, zero, zero])
     tl = jnp.array([0.0, 1.0, 0.0], w.dtype)
@@ -139,8 +138,13 @@ def fold_linearisation(w, ell, model: EnergyModel, args_at: ArgsMap, args):
     R = jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
     top = jnp.hstack([H, jnp.zeros_like(H), dF[1][:, None], dF[2][:, None]])
     mid = jnp.hstack([dH[0], H, (dH[1] @ phi)[:, None], (dH[2] @ phi)[:, None]])
-    bottom = jnp.concatenate([jnp.zeros(m, w.dtype), ell, jnp.zeros(2, w.dtype)])[None, :]
-    return R, jnp.vstack([top, mid, bottom])
+    return R, jnp.vstack([top, mid, _ell_row(ell)[None, :]])
+
+
+def _ell_row(ell):
+    """The normalisation's row [0 l^T 0 0] of the fold Jacobian."""
+    m = ell.shape[0]
+    return jnp.concatenate([jnp.zeros(m, ell.dtype), ell, jnp.zeros(2, ell.dtype)])
 
 
 def _corrector(w, data):
@@ -224,9 +228,11 @@ def fold_curve_run(model: EnergyModel, args_at: ArgsMap, w0, args, opts: FoldCur
     def step(s: _State) -> _State:
         w_pred = s.w + s.ds * s.t
         res = newton(None, w_pred, (w_pred, s.t, s.ell, model, args_at, args), tol=opts.tol,
-                     linearise=_corrector)
+                     linearise=_corrector, keep_jacobian=True)
         ell = _unit_ell(res.x[m:2 * m])
-        _, J = fold_linearisation(res.x, ell, model, args_at, args)
+        # the fold Jacobian at the new point: the corrector's, less its arclength row, with
+        # the normalisation row of the new l
+        J = res.jacobian[:-1].at[2 * m].set(_ell_row(ell))
         t_new = _tangent(J, s.t, W)
         accept = res.converged & (jnp.dot(W * t_new, s.t) > 0.9) & jnp.all(jnp.isfinite(t_new))
         k = s.k + jnp.where(accept, 1, 0)

@@ -79,7 +79,8 @@ def moore_spence_linearisation(z, data):
 def _solve_fold(energy, x0, lam0, phi0, args, tol):
     ell = phi0 / jnp.dot(phi0, phi0)
     z0 = jnp.concatenate([x0, phi0, jnp.atleast_1d(lam0)])
-    res = newton(None, z0, (energy, ell, args), tol=tol, linearise=moore_spence_linearisation)
+    res = newton(None, z0, (energy, ell, args), tol=tol, linearise=moore_spence_linearisation,
+                 keep_jacobian=True)
     m = x0.shape[0]
     return FoldPoint(res.x[:m], res.x[-1], res.x[m:2 * m], res)
 
@@ -87,7 +88,8 @@ def _solve_fold(energy, x0, lam0, phi0, args, tol):
 def moore_spence_solve(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13) -> FoldPoint:
     """Solve the Moore-Spence system from (x0, lam0) and null-vector guess phi0 (traceable).
 
-    The returned ``null_vector`` is normalised by l . phi = 1 with l = phi0 / |phi0|^2.
+    The returned ``null_vector`` is normalised by l . phi = 1 with l = phi0 / |phi0|^2;
+    ``newton.jacobian`` is the system's Jacobian at the fold (``coefficients_at_fold``).
     """
     return _solve_fold(energy, x0, lam0, phi0, args, tol)
 
@@ -106,6 +108,18 @@ def differentiable_fold(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13
     return implicit_newton(lambda z, p: moore_spence_residual(z, (energy, *p)), z0,
                            (ell, args), tol,
                            linearise=lambda z, p: moore_spence_linearisation(z, (energy, *p)))
+
+
+def coefficients_at_fold(jacobian, phi, mean: Callable[[jax.Array], Any]):
+    """(dF/dlam, d2F/dq2, phi normalised by mean(phi) = 1) from the Moore-Spence Jacobian at
+    a converged fold (its blocks F_lam and D^3E[phi]; phi the null vector it was taken at):
+    no new assembly of the energy's derivatives."""
+    m = phi.shape[0]
+    scale = mean(phi)
+    phi_q = phi / scale
+    d_lam = jnp.dot(jacobian[:m, 2 * m], phi_q)
+    d3 = phi_q @ jacobian[m:2 * m, :m] @ phi_q / scale  # D^3E is linear in phi
+    return d_lam, d3, phi_q
 
 
 def fold_coefficients(energy: Energy, x, lam, phi, args, mean: Callable[[jax.Array], Any]):
