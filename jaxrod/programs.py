@@ -41,12 +41,13 @@ def compiler_options() -> dict:
 
 
 def _inside_a_trace() -> bool:
-    """Whether a call made now is staged into an enclosing program (jit, scan, export), where
-    jax takes compiler options only from the outermost program; True where jax does not say
-    (a plain nested jit is always valid). Under a top-level grad or vmap it is False."""
+    """Whether a call made now is traced (into an enclosing jit, or under grad or vmap)
+    rather than run at the top level; True where jax does not say (a plain nested jit is
+    always valid). jax takes compiler options only from a top-level program (under grad it
+    stages the call into a new one)."""
     try:
         from jax._src import core
-        return core.unsafe_am_i_under_a_jit()
+        return not core.trace_state_clean()
     except (ImportError, AttributeError):
         return True
 
@@ -54,9 +55,9 @@ def _inside_a_trace() -> bool:
 class Program:
     """``jax.jit(fn, **kwargs)`` compiled with ``compiler_options()``, built on first use.
 
-    Called at the top level (also under a top-level grad or vmap) it compiles with the
-    options; staged into another program it is a plain nested ``jax.jit``. ``lower`` and
-    every other attribute go to the top-level function.
+    Called at the top level it compiles with the options; inside another trace (jit, grad,
+    vmap) it is a plain nested ``jax.jit``. ``lower`` and every other attribute go to the
+    top-level function.
     """
 
     def __init__(self, fn: Callable, **kwargs):
