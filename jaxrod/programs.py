@@ -61,11 +61,12 @@ class Program:
     """
 
     def __init__(self, fn: Callable, **kwargs):
+        # name and docstring only: fn's __dict__ may hold another Program's attributes
+        functools.update_wrapper(self, fn, updated=())
         self._fn = fn
         self._kwargs = kwargs
         self._jitted = None
         self.nested = jax.jit(fn, **kwargs)
-        functools.update_wrapper(self, fn)
 
     @property
     def jitted(self):

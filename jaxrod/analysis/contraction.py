@@ -60,6 +60,7 @@ def dual_norm(rho_quad, disc: PlanarDiscretisation) -> jax.Array:
     return jnp.sqrt(jnp.dot(b, jnp.linalg.solve(K, b)))
 
 
+@jit
 def contraction_constants(q, alpha, red: Reduction, scene: DipoleMagnet,
                           disc: PlanarDiscretisation) -> dict:
     """eta, S, E, Delta, H, K, epsilon at (q, alpha) (formulas in the module docstring)."""

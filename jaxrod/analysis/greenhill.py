@@ -62,6 +62,7 @@ def default_degree(G: float) -> int:
     return int(8 * math.ceil(n / 8.0))
 
 
+@jit
 def _straight_hessian(G, disc: PlanarDiscretisation):
     """Discrete second variation at theta = 0 with A = 0: the matrix of int u'^2 - G(1-s)u^2."""
     energy = lambda theta: UniformField(G, 0.0).energy(theta, disc)
@@ -85,6 +86,7 @@ def _smallest_generalised_eigenpair(H, M):
     return lam[0], v
 
 
+@jit
 def principal_eigenpair(G, disc: PlanarDiscretisation):
     """(beta0(G), u) for the support of ``disc``: int u^2 = 1 and int u > 0 (u > 0 inside).
 

@@ -25,9 +25,9 @@ import jax.numpy as jnp
 
 from jaxrod.discretise.director import director_discretisation
 from jaxrod.discretise.planar import PlanarDiscretisation
-from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet, dipole_potential, magnet_direction
 from jaxrod.scenes.three_d import DipoleMagnet3D, magnet_position
+from jaxrod.stored import StoredProgram
 
 
 def _smallest_generalised(H, W):
@@ -83,7 +83,12 @@ def out_of_plane(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation) 
     }
 
 
-out_of_plane_batch = jit(jax.vmap(out_of_plane, in_axes=(0, 0, None, None)))
+def _out_of_plane_rows(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation) -> dict:
+    """``out_of_plane`` at each row of theta and alpha."""
+    return jax.vmap(out_of_plane, in_axes=(0, 0, None, None))(theta, alpha, scene, disc)
+
+
+out_of_plane_batch = StoredProgram("out-of-plane", _out_of_plane_rows)
 
 
 def branch_verdict(scene: DipoleMagnet, branch, folds=(), n: int | None = None) -> dict:
@@ -100,16 +105,15 @@ def branch_verdict(scene: DipoleMagnet, branch, folds=(), n: int | None = None) 
 
     disc = planar_discretisation(n or branch.theta.shape[1], "clamped")
     r = {k: np.asarray(v) for k, v in out_of_plane_batch(
-        jnp.asarray(branch.theta), jnp.asarray(branch.alpha), scene, disc).items()}
+        np.asarray(branch.theta), np.asarray(branch.alpha), scene, disc).items()}
     stable = branch.stable & (np.abs(branch.alpha) <= np.pi / 2)  # the track's range
     i = int(np.argmin(np.where(stable, r["min_eig_perp"], np.inf)))
     e = branch.engaged
     engaged = slice(e.start + 1, e.stop)  # theta = 0 at the straight rod itself
     fold_rows = []
     if folds:
-        c = out_of_plane_batch(jnp.asarray(np.stack([f.theta for f in folds])),
-                               jnp.radians(jnp.asarray([f.alpha_deg for f in folds])), scene,
-                               disc)
+        c = out_of_plane_batch(np.stack([f.theta for f in folds]),
+                               np.radians([f.alpha_deg for f in folds]), scene, disc)
         for i, f in enumerate(folds):
             plane, perp = float(c["min_eig_plane"][i]), float(c["min_eig_perp"][i])
             fold_rows.append({"kind": f.kind, "alpha_deg": f.alpha_deg, "min_eig_plane": plane,

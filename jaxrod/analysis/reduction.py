@@ -54,6 +54,7 @@ from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
 from jaxrod.scenes.terms import bending_energy
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.newton import implicit_newton, newton
+from jaxrod.stored import StoredProgram
 
 
 def mean_functional(disc: PlanarDiscretisation) -> jax.Array:
@@ -61,6 +62,7 @@ def mean_functional(disc: PlanarDiscretisation) -> jax.Array:
     return disc.quad_weights @ disc.to_quad
 
 
+@jit
 def stiffness_matrix(disc: PlanarDiscretisation) -> jax.Array:
     """Matrix of int u' v' (the Hessian of the bending energy): the Gram matrix of ||.||_Y."""
     return jax.hessian(bending_energy)(jnp.zeros(disc.size, disc.quad_weights.dtype), disc)
@@ -126,6 +128,7 @@ class Reduction:
     mu_perp: jax.Array
 
 
+@jit
 def reduction(scene: DipoleMagnet, disc: PlanarDiscretisation) -> Reduction:
     """Build the ``Reduction`` of a scene (traceable; differentiable in G, M, D).
 
@@ -301,7 +304,7 @@ def _reduced_fold_pair(scene: DipoleMagnet, disc: PlanarDiscretisation, tol):
     return found, one, full, derivs, tip, inner, theta, red
 
 
-_reduced_fold_pair_jit = jit(_reduced_fold_pair)
+_reduced_fold_pair_jit = StoredProgram("reduced-fold-pair", _reduced_fold_pair)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -379,6 +382,7 @@ def reduced_folds(scene: DipoleMagnet, n: int = 16, tol: float = 1e-13) -> list[
     return [dataclasses.replace(f, kind=k) for f, k in zip(folds, ("lower", "upper"))]
 
 
+@jit
 def second_variation_checks(q, alpha, red: Reduction, scene: DipoleMagnet,
                             disc: PlanarDiscretisation) -> dict:
     """Numerical checks of the paper's Lemma "Planar stability criterion" at (q, alpha).

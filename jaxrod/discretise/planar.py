@@ -136,4 +136,5 @@ def planar_discretisation(n: int, support: str = "clamped",
     check_support(support)
     m = 2 * int(n) + 2 if quad_degree is None else int(quad_degree)
     arrays = _planar_arrays(int(n), support, m)
-    return PlanarDiscretisation(int(n), support, *(jnp.asarray(a) for a in arrays))
+    # device_put, not jnp.asarray: the latter compiles a copy program per new shape
+    return PlanarDiscretisation(int(n), support, *(jax.device_put(a) for a in arrays))
