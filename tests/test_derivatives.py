@@ -2,7 +2,6 @@
 scene's whole energy (``scene.energy``, built from the energy terms): energy, gradient,
 Hessian, D^3E[phi], and the parameter derivatives, to round-off."""
 
-import functools
 
 import jax
 import jax.numpy as jnp
@@ -12,6 +11,7 @@ import pytest
 from jaxrod.derivatives import Autodiff, Structured
 from jaxrod.discretise.director import director_discretisation
 from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.programs import jit
 from jaxrod.scenes import DipoleMagnet, UniformField
 from jaxrod.scenes.dipole import ALPHA_MODEL
 from jaxrod.scenes.three_d import DipoleMagnet3D, UniformField3D, magnet_position
@@ -72,7 +72,7 @@ def _relative(a, b):
     return float(jnp.max(jnp.abs(a - b)) / (1.0 + jnp.max(jnp.abs(b))))
 
 
-@functools.partial(jax.jit, static_argnums=(0, 1))
+@jit(static_argnums=(0, 1))  # compiled as jaxrod's own programs are (jaxrod.programs)
 def _both(model, reference, x, phi, lam, args):
     """Each quantity assembled and by plain autodiff of the whole energy, in one program."""
     E = reference.fn
@@ -117,7 +117,7 @@ def test_moore_spence_linearisation_is_the_residual_and_its_jacobian():
     z = jnp.concatenate([_state(m, 0.3), _state(m, 1.0, 0.4), jnp.array([lam])])
     data = (model, _state(m, 1.0, 0.9), args)
     plain = (Autodiff(_magnet_energy), data[1], args)
-    both = jax.jit(lambda z, ell, args: (
+    both = jit(lambda z, ell, args: (
         moore_spence_linearisation(z, (model, ell, args)),
         (moore_spence_residual(z, plain), jax.jacfwd(moore_spence_residual)(z, plain))))
     (R, J), (R_ref, J_ref) = both(z, data[1], args)
