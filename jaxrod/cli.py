@@ -547,7 +547,7 @@ def cmd_outofplane(args) -> int:
     import numpy as np
 
     from jaxrod.analysis.magnet import _equilibrium, trace_diagram
-    from jaxrod.analysis.outofplane import out_of_plane_batch
+    from jaxrod.analysis.outofplane import out_of_plane_at_rows
     from jaxrod.discretise.planar import planar_discretisation
 
     scene, info = _magnet_scene_from_args(args)
@@ -568,7 +568,7 @@ def cmd_outofplane(args) -> int:
         theta, alpha, stable = np.array(theta), np.array(alpha), np.array(stable)
     rows = []
     if len(alpha):
-        r = {k: np.asarray(v) for k, v in out_of_plane_batch(theta, alpha, scene, disc).items()}
+        r = out_of_plane_at_rows(theta, alpha, scene, disc)
         for i in range(len(alpha)):
             rows.append({"alpha_deg": float(np.degrees(alpha[i])), "planar_stable": bool(stable[i]),
                          "min_eig_perp": float(r["min_eig_perp"][i]),

@@ -80,3 +80,23 @@ def test_fit_does_not_recompile():
         with compilations() as c:
             fit.fit_youngs_modulus(a, 1.0, True)
         assert c[0] == 0
+
+
+def test_out_of_plane_rows_of_another_count_compile_nothing():
+    """A diagram's length depends on the values; the out-of-plane check pads its rows to a
+    power of two, so that 5 and 7 rows (a branch of another length) share one program."""
+    from jaxrod.analysis.outofplane import out_of_plane, out_of_plane_at_rows
+    from jaxrod.discretise.planar import planar_discretisation
+
+    scene = magnet.make_scene(2.2, 0.0236, D_EXP)
+    disc = planar_discretisation(8)
+    rng = np.random.default_rng(1)
+    theta, alpha = 0.3 * rng.standard_normal((7, disc.size)), rng.uniform(-0.5, 0.5, 7)
+    first = out_of_plane_at_rows(theta[:5], alpha[:5], scene, disc)
+    with compilations() as c:
+        rows = out_of_plane_at_rows(theta, alpha, scene, disc)
+    assert c[0] == 0
+    assert rows["min_eig_perp"].shape == (7,)
+    np.testing.assert_allclose(rows["min_eig_perp"][:5], first["min_eig_perp"], rtol=1e-12)
+    one = out_of_plane(theta[6], alpha[6], scene, disc)  # the last row, on its own
+    np.testing.assert_allclose(rows["min_eig_perp"][6], one["min_eig_perp"], rtol=1e-10)

@@ -91,6 +91,18 @@ def _out_of_plane_rows(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisa
 out_of_plane_batch = StoredProgram("out-of-plane", _out_of_plane_rows)
 
 
+def out_of_plane_at_rows(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation) -> dict:
+    """``out_of_plane_batch`` on rows padded (with the last row) to a power of two, so that
+    branches of other lengths reuse the compiled program; the padding is dropped again."""
+    import numpy as np
+
+    k = theta.shape[0]
+    size = 1 << max(k - 1, 0).bit_length()
+    pad = lambda v: np.concatenate([v, np.repeat(v[-1:], size - k, axis=0)])
+    rows = out_of_plane_batch(pad(np.asarray(theta)), pad(np.asarray(alpha)), scene, disc)
+    return {key: np.asarray(v)[:k] for key, v in rows.items()}
+
+
 def branch_verdict(scene: DipoleMagnet, branch, folds=(), n: int | None = None) -> dict:
     """Out-of-plane verdict for a traced planar diagram (``jaxrod.analysis.branch.Branch``):
     the smallest out-of-plane eigenvalue over its planar-stable points with |alpha| <= 90
@@ -104,16 +116,15 @@ def branch_verdict(scene: DipoleMagnet, branch, folds=(), n: int | None = None) 
     from jaxrod.discretise.planar import planar_discretisation
 
     disc = planar_discretisation(n or branch.theta.shape[1], "clamped")
-    r = {k: np.asarray(v) for k, v in out_of_plane_batch(
-        np.asarray(branch.theta), np.asarray(branch.alpha), scene, disc).items()}
+    r = out_of_plane_at_rows(branch.theta, branch.alpha, scene, disc)
     stable = branch.stable & (np.abs(branch.alpha) <= np.pi / 2)  # the track's range
     i = int(np.argmin(np.where(stable, r["min_eig_perp"], np.inf)))
     e = branch.engaged
     engaged = slice(e.start + 1, e.stop)  # theta = 0 at the straight rod itself
     fold_rows = []
     if folds:
-        c = out_of_plane_batch(np.stack([f.theta for f in folds]),
-                               np.radians([f.alpha_deg for f in folds]), scene, disc)
+        c = out_of_plane_at_rows(np.stack([f.theta for f in folds]),
+                         np.radians([f.alpha_deg for f in folds]), scene, disc)
         for i, f in enumerate(folds):
             plane, perp = float(c["min_eig_plane"][i]), float(c["min_eig_perp"][i])
             fold_rows.append({"kind": f.kind, "alpha_deg": f.alpha_deg, "min_eig_plane": plane,
