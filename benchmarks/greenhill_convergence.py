@@ -38,6 +38,7 @@ from common import benchmark_main  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
 from jaxrod.analysis.greenhill import pitchfork_coefficients  # noqa: E402
+from jaxrod.programs import jit  # noqa: E402  (as jaxrod compiles its own programs)
 
 
 def _time(fn, *args, repeat=20):
@@ -62,7 +63,7 @@ def run(quick: bool) -> dict:
         a2_ref = airy.pitchfork_coefficient(G, support)
         for n in degrees:
             disc = jr.planar_discretisation(n, support)
-            fn = jax.jit(pitchfork_coefficients)
+            fn = jit(pitchfork_coefficients)
             compile_s, warm_s = _time(fn, G, disc)
             beta, a2, _ = (float(v) for v in fn(G, disc))
             row = {

@@ -28,6 +28,7 @@ from common import benchmark_main, write_results
 
 import jaxrod as jr
 from jaxrod.analysis import magnet
+from jaxrod.programs import jit  # as jaxrod compiles its own programs
 
 D_EXP = 11.25 / 9.2
 CASES = {"200": (2.2, 0.0236), "100": (4.4, 0.0472)}
@@ -43,22 +44,22 @@ def _residual(energy):
     return lambda x, a: jax.grad(energy)(x, a[0], a[1:])
 
 
-@jax.jit
+@jit
 def equilibrium_planar(x0, scene, disc):
     return jr.newton(_residual(magnet.alpha_energy), x0, (ALPHA, scene, disc), tol=1e-13)
 
 
-@jax.jit
+@jit
 def equilibrium_3d(x0, scene, disc):
     return jr.newton(_residual(energy_3d), x0, (ALPHA, scene, disc), tol=1e-13)
 
 
-@jax.jit
+@jit
 def fold_planar(x0, a0, phi0, scene, disc):
     return jr.moore_spence_solve(magnet.alpha_energy, x0, a0, phi0, (scene, disc))
 
 
-@jax.jit
+@jit
 def fold_3d(x0, a0, phi0, scene, disc):
     return jr.moore_spence_solve(energy_3d, x0, a0, phi0, (scene, disc))
 

@@ -27,6 +27,7 @@ import numpy as np
 
 import jaxrod as jr
 from jaxrod.analysis.batch import fold_pairs_program
+from jaxrod.programs import jit  # as jaxrod compiles its own programs
 
 HERE = Path(__file__).resolve().parent
 D_EXP = 11.25 / 9.2
@@ -68,7 +69,7 @@ def memory_per_set(K: int, dtype: str) -> float | None:
         return None
 
 
-_baseline = jax.jit(jax.vmap(lambda G, M, D: jr.fold_angles(G, M, D, n=12)))
+_baseline = jit(jax.vmap(lambda G, M, D: jr.fold_angles(G, M, D, n=12)))
 
 
 def run(ks, quick: bool) -> dict:

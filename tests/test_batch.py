@@ -2,6 +2,7 @@ import numpy as np
 
 from jaxrod.analysis import magnet
 from jaxrod.analysis.batch import fold_pairs
+from jaxrod.programs import jit
 
 D = 11.25 / 9.2
 
@@ -71,7 +72,7 @@ def test_more_bracketing_cells_rescue_small_clearances():
     disc = planar_discretisation(12, "clamped")
     rows = [(2.263, 2.263 * 0.0236 / 2.2, 1.1908), (1.760, 1.760 * 0.0236 / 2.2, 1.1872)]
     for cells in (1, 4):
-        program = jax.jit(jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc, cells)))
+        program = jit(jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc, cells)))
         z, converged, _ = program(*(np.array(c) for c in zip(*rows)))
         converged = np.asarray(converged)
         assert not converged.any() if cells == 1 else converged.all()

@@ -19,6 +19,7 @@ from jaxrod.analysis import fold_curves as fc
 from jaxrod.analysis.magnet import _equilibrium, locate_folds
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import ParameterError
+from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet
 from jaxrod.solvers.continuation import REACHED_BOUND
 from jaxrod.solvers.fold_curve import fold_curve_run
@@ -134,7 +135,7 @@ def test_fold_curve_follows_round_the_cusp_back_to_the_other_fold():
                    key=lambda f: f.alpha_deg)
     disc = planar_discretisation(fc.DEFAULT_N, "clamped")
     opts = fc.CURVE_OPTIONS._replace(u_min=-0.01, u_max=0.5)
-    run = jax.jit(fold_curve_run, static_argnums=(0, 1, 5))(
+    run = jit(fold_curve_run, static_argnums=(0, 1, 5))(
         fc.ALPHA_MODEL, fc.Vary("groups", 2), jnp.asarray(w0[0]),
         (jnp.asarray(point.values), disc), opts, 512, 1.0)
     k = int(run.num_points)
