@@ -59,6 +59,18 @@ def _condition_numbers(q, alpha, red, scene, disc):
 _condition_batch = jit(jax.vmap(_condition_numbers, in_axes=(0, 0, None, None, None)))
 
 
+@jit
+def _alpha_on_branch(q, alpha0, red, scene, disc):
+    """alpha with F(q, alpha) = 0 at each q, by Newton from alpha0 (one program)."""
+
+    def alpha_at(qi):
+        res = newton(lambda a, _: jnp.atleast_1d(reduced_function(qi, a[0], red, scene, disc)),
+                     jnp.atleast_1d(alpha0), None, tol=1e-14)
+        return res.x[0], res.converged
+
+    return jax.vmap(alpha_at)(q)
+
+
 def conditioning_near_fold(scene: DipoleMagnet, fold: ReducedFold, n: int = 16,
                            offsets=None, side: float = -1.0) -> dict:
     """Condition numbers at branch points q = q* + side * dq for dq in ``offsets``.
@@ -75,12 +87,7 @@ def conditioning_near_fold(scene: DipoleMagnet, fold: ReducedFold, n: int = 16,
     a_star = np.radians(fold.alpha_deg)
     q = fold.q + side * offsets
 
-    def alpha_at(qi):
-        res = newton(lambda a, _: jnp.atleast_1d(reduced_function(qi, a[0], red, scene, disc)),
-                     jnp.atleast_1d(a_star), None, tol=1e-14)
-        return res.x[0], res.converged
-
-    alpha, ok = jit(jax.vmap(alpha_at))(jnp.asarray(q))
+    alpha, ok = _alpha_on_branch(np.asarray(q), a_star, red, scene, disc)
     if not bool(jnp.all(ok)):
         raise RuntimeError("conditioning_near_fold: F(q, alpha) = 0 not solved at every offset")
     cond = _condition_batch(jnp.asarray(q), alpha, red, scene, disc)

@@ -290,15 +290,23 @@ def loss_profile(measured, E_values, sigma_deg: float = 1.0, fit_offset: bool = 
     """0.5 chi^2 over a grid of E (offset at its best value for each E when fitted)."""
     measured, mask = _parse(measured, sigma_deg)
     setup = setup or setup_from_preset()
+    return np.asarray(_loss_profile_program(
+        np.log(np.asarray(E_values, np.float64)), np.nan_to_num(measured), mask,
+        float(sigma_deg), bool(fit_offset), setup))
+
+
+@jit
+def _loss_profile_program(log_e, measured, mask, sigma_deg, fit_offset, setup):
+    """``loss_profile`` at each log E (one program for every grid of the same length)."""
 
     def at(log_e):
         model, ok = model_angles(jnp.array([log_e, 0.0]), setup)
-        d = jnp.where(mask, jnp.asarray(np.nan_to_num(measured)) - model, 0.0)
+        d = jnp.where(mask, measured - model, 0.0)
         delta = jnp.where(fit_offset, jnp.sum(d) / jnp.sum(mask), 0.0)
         r = jnp.where(mask, (d - delta) / sigma_deg, 0.0)
         return jnp.where(ok, 0.5 * jnp.sum(r**2), jnp.nan)
 
-    return np.asarray(jit(jax.vmap(at))(jnp.log(jnp.asarray(E_values, jnp.float64))))
+    return jax.vmap(at)(log_e)
 
 
 # --- several parameters: calibration of the experiment on physical inputs -------------------
