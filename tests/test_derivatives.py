@@ -123,3 +123,24 @@ def test_moore_spence_linearisation_is_the_residual_and_its_jacobian():
     (R, J), (R_ref, J_ref) = both(z, data[1], args)
     np.testing.assert_allclose(R, R_ref, atol=1e-13)
     np.testing.assert_allclose(J, J_ref, atol=1e-12)
+
+
+def test_fold_coefficients_from_the_moore_spence_jacobian():
+    """dF/dlam and d2F/dq2 read off the Jacobian Newton ends with (no new assembly) equal
+    those assembled afresh at the fold (D^3E[phi] by a tangent of the Hessian)."""
+    from jaxrod.analysis.magnet import trace_diagram
+    from jaxrod.solvers.folds import coefficients_at_fold, fold_coefficients, moore_spence_solve
+
+    model, args, _ = CASES["magnet planar"]
+    disc = args[1]
+    # a start near the paper's upper fold (alpha ~ 39.3 deg), from the diagram
+    branch = trace_diagram(args[0], n=disc.n)
+    i = int(branch.fold_indices[-1])
+    H = model.hessian(jnp.asarray(branch.theta[i]), branch.alpha[i], args)
+    fp = jax.jit(lambda x, a, p: moore_spence_solve(model, x, a, p, args))(
+        jnp.asarray(branch.theta[i]), branch.alpha[i], jnp.linalg.eigh(H)[1][:, 0])
+    assert bool(fp.newton.converged)
+    from_jacobian = coefficients_at_fold(fp.newton.jacobian, fp.null_vector, disc.mean)
+    assembled = fold_coefficients(model, fp.x, fp.lam, fp.null_vector, args, disc.mean)
+    for a, b in zip(from_jacobian, assembled):
+        np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)

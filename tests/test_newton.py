@@ -37,3 +37,14 @@ def test_nonfinite_and_budget():
     assert int(res.status) == NONFINITE and not bool(res.converged)
     res = newton(lambda x, _: jnp.arctan(x), jnp.array([1.5]), None, max_steps=1)
     assert int(res.status) == MAX_STEPS and int(res.iterations) == 1
+
+
+def test_kept_jacobian_is_the_jacobian_at_the_returned_point():
+    """keep_jacobian returns dF/dx at the final x (what the continuations and fold reports
+    use instead of assembling it again), checked against forward-mode autodiff there."""
+    linearise = lambda x, r: (_circle(x, r), jax.jacfwd(_circle)(x, r))
+    for x0 in (jnp.array([3.0, 1.0]), jnp.array([2.0 + 1e-12, 2.0])):  # many steps / one
+        res = newton(None, x0, 2.0, linearise=linearise, keep_jacobian=True)
+        assert bool(res.converged)
+        assert jnp.allclose(res.jacobian, jax.jacfwd(_circle)(res.x, 2.0), atol=1e-15)
+    assert newton(_circle, jnp.array([3.0, 1.0]), 2.0).jacobian is None

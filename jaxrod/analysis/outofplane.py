@@ -124,7 +124,7 @@ def branch_verdict(scene: DipoleMagnet, branch, folds=(), n: int | None = None) 
     fold_rows = []
     if folds:
         c = out_of_plane_at_rows(np.stack([f.theta for f in folds]),
-                         np.radians([f.alpha_deg for f in folds]), scene, disc)
+                                 np.radians([f.alpha_deg for f in folds]), scene, disc)
         for i, f in enumerate(folds):
             plane, perp = float(c["min_eig_plane"][i]), float(c["min_eig_perp"][i])
             fold_rows.append({"kind": f.kind, "alpha_deg": f.alpha_deg, "min_eig_plane": plane,

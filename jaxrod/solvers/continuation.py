@@ -103,13 +103,9 @@ def _unit_tangent(B, m):
     return t / jnp.sqrt(_wdot(t, t, m))
 
 
-def initial_tangent(energy: Energy, x0, lam0, args, direction: float = 1.0):
-    """Unit tangent at a regular point, oriented so that d lam has the sign of ``direction``."""
-    _, H, g_lam = as_model(energy).linearisation(x0, lam0, args)
-    return _oriented_tangent(H, g_lam, direction)
-
-
 def _oriented_tangent(H, g_lam, direction):
+    """Unit tangent at a regular point from its blocks H, F_lam, oriented so that d lam has
+    the sign of ``direction``."""
     m = H.shape[0]
     e = jnp.zeros(m + 1, H.dtype).at[-1].set(1.0)
     return jnp.sign(direction) * _unit_tangent(_bordered(H, g_lam, e), m)

@@ -128,12 +128,12 @@ def fold_linearisation(w, ell, model: EnergyModel, args_at: ArgsMap, args):
     (phi, 0, 0), (0, 1, 0) and (0, 0, 1) in (x, lam, u)."""
     m = ell.shape[0]
     x, phi, lam, u = split(w, m)
-    pair = lambda y, l, v: model.gradient_and_hessian(y, l, args_at(v, args))[::-1]
+    pair = lambda y, l, v: model.gradient_and_hessian(y, l, args_at(v, args))
     zero = jnp.zeros_like(phi)
     tx = jnp.stack([phi, zero, zero])
     tl = jnp.array([0.0, 1.0, 0.0], w.dtype)
     tu = jnp.array([0.0, 0.0, 1.0], w.dtype)
-    (H, F), (dH, dF) = jax.vmap(lambda a, b, c: jax.jvp(pair, (x, lam, u), (a, b, c)),
+    (F, H), (dF, dH) = jax.vmap(lambda a, b, c: jax.jvp(pair, (x, lam, u), (a, b, c)),
                                 out_axes=(None, 0))(tx, tl, tu)
     R = jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
     top = jnp.hstack([H, jnp.zeros_like(H), dF[1][:, None], dF[2][:, None]])
