@@ -61,15 +61,13 @@ from jaxrod.analysis.fold_curves import (
     groups_of,
     range_of,
 )
-from jaxrod.analysis.magnet import default_options, locate_folds
+from jaxrod.analysis.magnet import default_options, locate_folds, run_to_second_fold
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import UNITS, ParameterError
 from jaxrod.programs import jit
 from jaxrod.progress import progress_bar
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
-from jaxrod.solvers.continuation import continuation_run
 from jaxrod.solvers.folds import moore_spence_solve
-from jaxrod.solvers.newton import newton
 
 OK, NOT_BISTABLE, FOLD_BEYOND_90, INVALID_INPUT, NOT_CONVERGED = 0, 1, 2, 3, 4
 REASONS = {OK: "bistable: both folds in (0, 90] degrees",
@@ -161,30 +159,22 @@ def _retry_one(G, M, D, disc):
     degrees, stopping after two folds) and Moore-Spence at its first two folds."""
     scene = DipoleMagnet(G, M, D, 0.0)
     args = (scene, disc)
-    start = newton(lambda th, a: ALPHA_MODEL.gradient(th, 0.0, a), jnp.zeros(disc.size), args,
-                   jacobian=lambda th, a: ALPHA_MODEL.hessian(th, 0.0, a))
-    opts = default_options(0)._replace(max_folds=2.0, lam_min=-0.1, lam_max=math.pi)
-    raw = continuation_run(ALPHA_MODEL, start.x, 0.0, args, opts, RETRY_CAPACITY, 1.0)
-    t = raw.tangent_lam
-    change = t[:-1] * t[1:] < 0.0
-    folds = jnp.sum(change)
-    i = jnp.nonzero(change, size=2, fill_value=0)[0]
-    j = jnp.where(jnp.abs(t[i]) <= jnp.abs(t[i + 1]), i, i + 1)
+    raw, theta, alpha, phi, folds = run_to_second_fold(scene, disc, math.pi, RETRY_CAPACITY)
+    started = raw.residual_norm[0] <= default_options().tol
 
-    def refine(theta, alpha):
-        _, V = jnp.linalg.eigh(ALPHA_MODEL.hessian(theta, alpha, args))
-        fp = moore_spence_solve(ALPHA_MODEL, theta, alpha, V[:, 0], args)
+    def refine(theta, alpha, phi):
+        fp = moore_spence_solve(ALPHA_MODEL, theta, alpha, phi, args)
         return fp.lam, fp.newton.converged
 
-    alphas, ok = jax.vmap(refine)(raw.x[j], raw.lam[j])
+    alphas, ok = jax.vmap(refine)(theta, alpha, phi)
     alphas = jnp.sort(alphas)
-    two = start.converged & (folds >= 2)
+    two = started & (folds >= 2)
     solved = two & jnp.all(ok) & (alphas[1] - alphas[0] > 1e-9)
     beyond = solved & (alphas[1] > 0.5 * math.pi)
     # fewer than two folds: not bistable if the run ended normally (bound reached)
     ended = raw.status == 1
     code = jnp.where(solved, jnp.where(beyond, FOLD_BEYOND_90, OK),
-                     jnp.where(start.converged & ~two & ended, NOT_BISTABLE, NOT_CONVERGED))
+                     jnp.where(started & ~two & ended, NOT_BISTABLE, NOT_CONVERGED))
     return alphas, code
 
 

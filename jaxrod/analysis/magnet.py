@@ -214,27 +214,38 @@ def _refine_program(theta0, alpha0, scene, disc, tol):
 _refine_batch = StoredProgram("magnet-refine", _refine_program)
 
 
-def fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
-    """Approximate folds from a one-sided continuation that stops after the second fold:
-    (states, angles, null-vector guesses, found).
+#: Capacity of the continuation that finds the fold guesses (alpha up to 90 degrees).
+FOLD_PAIR_CAPACITY = 128
 
-    It starts from the straight rod at alpha = 0, an equilibrium for every (G, M, D) by the
-    mirror symmetry theta -> -theta of E_perm at alpha = 0 (no Newton solve needed; the run
-    records its residual there). At the recorded point nearest each fold the state part of
-    the branch's tangent is the null-vector guess (at the fold it is the Hessian's kernel).
+
+def run_to_second_fold(scene: DipoleMagnet, disc: PlanarDiscretisation,
+                       alpha_max: float = math.pi / 2, capacity: int = FOLD_PAIR_CAPACITY):
+    """The continuation in alpha from the straight rod at alpha = 0 that stops after the
+    second fold (or at ``alpha_max``), and its approximate folds: (run, states, angles,
+    null-vector guesses, number of folds passed).
+
+    The straight rod is an equilibrium at alpha = 0 for every (G, M, D) by the mirror
+    symmetry theta -> -theta of E_perm there (no Newton solve needed; the run records its
+    residual). At the recorded point nearest each fold the state part of the branch's
+    tangent is the null-vector guess (at the fold it is the Hessian's kernel).
     """
-    options = default_options(0)._replace(max_folds=2.0, lam_min=-0.1)
+    options = default_options(0)._replace(max_folds=2.0, lam_min=-0.1, lam_max=alpha_max)
     raw = continuation_run(ALPHA_MODEL, jnp.zeros(disc.size), 0.0, (scene, disc), options,
-                           FOLD_PAIR_CAPACITY, 1.0)
+                           capacity, 1.0)
     t = raw.tangent_lam
     change = t[:-1] * t[1:] < 0.0
     i = jnp.nonzero(change, size=2, fill_value=0)[0]
     j = jnp.where(jnp.abs(t[i]) <= jnp.abs(t[i + 1]), i, i + 1)
-    found = (raw.residual_norm[0] <= options.tol) & (jnp.sum(change) >= 2)
-    return raw.x[j], raw.lam[j], raw.tangent_x[j], found
+    return raw, raw.x[j], raw.lam[j], raw.tangent_x[j], jnp.sum(change)
 
 
-FOLD_PAIR_CAPACITY = 128
+def fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
+    """Approximate folds in (0, 90] degrees (``run_to_second_fold``): (states, angles,
+    null-vector guesses, found)."""
+    raw, x, lam, phi, folds = run_to_second_fold(scene, disc)
+    found = (raw.residual_norm[0] <= default_options().tol) & (folds >= 2)
+    return x, lam, phi, found
+
 
 
 def fold_angles(G, M, D, n: int = 12, tol: float = 1e-13):
