@@ -144,3 +144,38 @@ def test_fold_coefficients_from_the_moore_spence_jacobian():
     assembled = fold_coefficients(model, fp.x, fp.lam, fp.null_vector, args, disc.mean)
     for a, b in zip(from_jacobian, assembled):
         np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("where", ["away from the fold", "at the fold"])
+def test_bordered_moore_spence_step_is_the_newton_step(where):
+    """The block-eliminated step (bordered matrix [H phi; l^T 0], D^3E[phi] applied to
+    vectors) equals the dense solve with the assembled Moore-Spence Jacobian, also at the
+    fold, where H itself is singular."""
+    from jaxrod.analysis.batch import fold_pair_states
+    from jaxrod.solvers.folds import moore_spence_blocks, moore_spence_step
+
+    model, args, lam = CASES["magnet planar"]
+    scene, disc = args
+    m = disc.size
+    if where == "at the fold":
+        z = fold_pair_states(scene.G, scene.M, scene.D, disc)[0][1]
+        rhs = _state(2 * m + 1, 1.0, 0.7)  # any right-hand side
+    else:
+        z = jnp.concatenate([_state(m, 0.3), _state(m, 1.0, 0.4), jnp.array([lam])])
+        rhs = None
+    ell = z[m:2 * m] / jnp.dot(z[m:2 * m], z[m:2 * m])
+
+    def steps(z, ell, rhs):
+        data = (model, ell, args)
+        R, J = moore_spence_linearisation(z, data)
+        R2, blocks = moore_spence_blocks(z, data)
+        b = -R if rhs is None else rhs
+        return R, R2, jnp.linalg.solve(J, b), moore_spence_step(blocks, b, data), J
+
+    R, R2, dense_step, bordered_step, J = jit(steps)(z, ell, rhs)
+    if where == "at the fold":  # H is singular there: the bordered matrix is not
+        H = J[:m, :m]
+        assert np.linalg.cond(np.asarray(H)) > 1e8
+    np.testing.assert_allclose(R2, R, atol=1e-12)
+    scale = float(jnp.max(jnp.abs(dense_step)))
+    np.testing.assert_allclose(bordered_step, dense_step, atol=1e-10 * scale)

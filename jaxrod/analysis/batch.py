@@ -33,12 +33,16 @@ from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import RANGES, ParameterError, check_degree
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
-from jaxrod.solvers.folds import moore_spence_linearisation
+from jaxrod.solvers import dense
+from jaxrod.solvers.folds import moore_spence_blocks, moore_spence_step
 from jaxrod.solvers.newton import newton
 
 #: The (q, alpha) grid that brackets the one-mode folds: q in [0, Q_MAX], alpha in [0, 90] deg.
 GRID_Q, GRID_ALPHA, Q_MAX = 40, 40, 1.6
-#: Bracketing cells kept per parameter set.
+
+#: Bracketing cells counted per parameter set: "the last cell" is the last of the first
+#: CANDIDATES (at small clearances the grid's last crossed cells, near q = Q_MAX, lead the
+#: one-mode solve back to the first fold).
 CANDIDATES = 64
 
 #: Newton's budgets in the batch (its loops run to the slowest element): the one-mode solve
@@ -122,6 +126,21 @@ def _sign_change(X):
     return (jnp.min(corners, 0) < 0) & (jnp.max(corners, 0) > 0)
 
 
+def _crossed_cell(crossed, rank):
+    """(alpha row, q column) of the crossed cell of the given rank (row-major, from 0) in the
+    boolean grid ``crossed``: counts per row and their running sums locate the row, the
+    running sum within that row the column (small sums and masked reductions, which are
+    cheap under vmap on a CPU; ``jnp.nonzero``'s scatter over the whole grid is not)."""
+    rows = jnp.arange(crossed.shape[0])
+    per_row = jnp.sum(crossed, axis=1)
+    before_end = jnp.cumsum(per_row)
+    r = jnp.minimum(jnp.sum(before_end <= rank), crossed.shape[0] - 1)
+    row = jnp.sum(jnp.where(rows[:, None] == r, crossed, 0), axis=0)
+    before = jnp.sum(jnp.where(rows < r, per_row, 0))
+    c = jnp.minimum(jnp.sum(jnp.cumsum(row) <= rank - before), crossed.shape[1] - 1)
+    return r, c
+
+
 def _canonical(z, m):
     """The fold state z = (x, phi, alpha) mapped to alpha in [0, pi]: the energy is
     2 pi-periodic in alpha and symmetric under (theta, alpha) -> -(theta, alpha) (with the
@@ -159,13 +178,14 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation, cells: int = 1):
     # (row-major: alpha first) start one-mode Newton solves; the converged one-mode folds of
     # smallest and largest alpha are the lower and the upper one
     count = jnp.sum(cells_crossed)
-    ia, iq = jnp.nonzero(cells_crossed, size=CANDIDATES, fill_value=0)
     k = jnp.arange(cells)
     slot = jnp.concatenate([k, count - cells + k])
     used = (slot >= 0) & (slot < count)
-    slot = jnp.clip(slot, 0, CANDIDATES - 1)
-    ia, iq = ia[slot], iq[slot]
-    start = jnp.stack([0.5 * (qs[iq] + qs[iq + 1]), 0.5 * (al[ia] + al[ia + 1])], axis=1)
+    ia, iq = jax.vmap(lambda rank: _crossed_cell(cells_crossed, rank))(
+        jnp.clip(slot, 0, CANDIDATES - 1))
+    # the cells' centres (the grids are uniform from 0: no gather of qs and al)
+    start = jnp.stack([(iq + 0.5).astype(dtype) * qs[1], (ia + 0.5).astype(dtype) * al[1]],
+                      axis=1)
     # a batch runs its Newton loops until the slowest element is done: unused slots (and an
     # element without brackets) start from NaN, which ends their solves at the first pass
     start = jnp.where(used[:, None], start, jnp.nan)
@@ -173,7 +193,8 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation, cells: int = 1):
     def one_mode(x0):
         residual = lambda x, _: jnp.stack(_one_mode_derivatives(
             x[0], _one_mode_moments(x[0], psi_q, disc), x[1], bend, scene))
-        return newton(residual, x0, None, tol=tol, xtol=xtol, stall_xtol=stall, **ONE_MODE_BUDGET)
+        return newton(residual, x0, None, tol=tol, xtol=xtol, stall_xtol=stall,
+                      solve=dense.solve, **ONE_MODE_BUDGET)
 
     solves = jax.vmap(one_mode)(start)
     # a solve may land on a periodic or mirror image of a fold (as in ``_canonical``)
@@ -192,8 +213,11 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation, cells: int = 1):
 
     def fold(x):
         z0 = jnp.where(found, jnp.concatenate([x[0] * psi, psi, x[1:2]]), jnp.nan)
-        res = newton(None, z0, (ALPHA_MODEL, ell, (scene, disc)), tol=tol, xtol=xtol,
-                     stall_xtol=stall, linearise=moore_spence_linearisation, **FOLD_BUDGET)
+        data = (ALPHA_MODEL, ell, (scene, disc))
+        res = newton(None, z0, data, tol=tol, xtol=xtol, stall_xtol=stall,
+                     linearise=moore_spence_blocks,
+                     solve=lambda blocks, rhs: moore_spence_step(blocks, rhs, data),
+                     **FOLD_BUDGET)
         return res.x, res
 
     states, ms = jax.vmap(fold)(one_x)

@@ -231,7 +231,7 @@ def run_to_second_fold(scene: DipoleMagnet, disc: PlanarDiscretisation,
     """
     options = default_options(0)._replace(max_folds=2.0, lam_min=-0.1, lam_max=alpha_max)
     raw = continuation_run(ALPHA_MODEL, jnp.zeros(disc.size), 0.0, (scene, disc), options,
-                           capacity, 1.0)
+                           capacity, 1.0, spectrum=False)
     t = raw.tangent_lam
     change = t[:-1] * t[1:] < 0.0
     i = jnp.nonzero(change, size=2, fill_value=0)[0]

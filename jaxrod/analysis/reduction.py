@@ -52,6 +52,7 @@ from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
 from jaxrod.scenes.terms import bending_energy
+from jaxrod.solvers import dense
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.newton import implicit_newton, newton
 from jaxrod.stored import StoredProgram
@@ -105,7 +106,7 @@ def normalised_mode(G, M, D, disc: PlanarDiscretisation):
     B = b0_matrix(G, M, D, disc)
     n = m.shape[0]
     kkt = jnp.block([[B, m[:, None]], [m[None, :], jnp.zeros((1, 1), B.dtype)]])
-    psi = jnp.linalg.solve(kkt, jnp.zeros(n + 1, B.dtype).at[-1].set(1.0))[:n]
+    psi = dense.solve(kkt, jnp.zeros(n + 1, B.dtype).at[-1].set(1.0))[:n]
     pq, dpq = disc.at_quadrature(psi)
     a0 = 2.0 * M / delta**3 - G * (1.0 - disc.quad_nodes)
     lam = disc.integrate(dpq**2 + a0 * pq**2)

@@ -140,8 +140,12 @@ def pseudo_arclength(energy: Energy, x0: jax.Array, lam0, args: Any,
 
 
 def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, capacity: int,
-                     direction) -> RawBranch:
-    """Traceable core of ``pseudo_arclength`` (``capacity`` static; vmappable over direction)."""
+                     direction, spectrum: bool = True) -> RawBranch:
+    """Traceable core of ``pseudo_arclength`` (``capacity`` static; vmappable over direction).
+
+    ``spectrum`` (static): record the Hessian's smallest eigenvalue and Morse index at every
+    point (an eigendecomposition per step); without it ``min_eig`` stays NaN and
+    ``morse_index`` -1, for runs that only need the branch and its folds."""
     model = as_model(energy)
     m = x0.shape[0]
     y0 = jnp.append(x0, lam0)
@@ -156,7 +160,7 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
         rejected_steps=jnp.asarray(0))
 
     def record(out: RawBranch, k, y, t, H, iters, res):
-        lo, index = _spectrum(H)
+        lo, index = _spectrum(H) if spectrum else (jnp.nan, -1)
         return out._replace(
             x=out.x.at[k].set(y[:-1]), lam=out.lam.at[k].set(y[-1]),
             tangent_lam=out.tangent_lam.at[k].set(t[-1]),

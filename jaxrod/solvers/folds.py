@@ -33,6 +33,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrod.derivatives import EnergyModel, as_model
+from jaxrod.solvers import dense
 from jaxrod.solvers.newton import NewtonResult, implicit_newton, newton
 
 #: An ``EnergyModel`` (assembled derivatives) or a plain energy function E(x, lam, args).
@@ -74,6 +75,84 @@ def moore_spence_linearisation(z, data):
     mid = jnp.hstack([T, H, Hphi_lam[:, None]])
     bottom = jnp.concatenate([jnp.zeros(m, H.dtype), ell, jnp.zeros(1, H.dtype)])[None, :]
     return R, jnp.vstack([top, mid, bottom])
+
+
+class FoldBlocks(NamedTuple):
+    """The Moore-Spence Jacobian at z = (x, phi, lam) kept in blocks: H, F_lam and
+    (H phi)_lam (D^3E[phi] is applied to vectors when needed, never formed)."""
+
+    H: jax.Array
+    F_lam: jax.Array
+    Hphi_lam: jax.Array
+    z: jax.Array
+
+
+def _directional_gradient(model, x, lam, args, v):
+    """(grad E, H v) at (x, lam): one forward tangent of the gradient (no Hessian)."""
+    return jax.jvp(lambda y: model.gradient(y, lam, args), (x,), (v,))
+
+
+def moore_spence_blocks(z, data):
+    """(``moore_spence_residual``, ``FoldBlocks``): the residual and the Jacobian's blocks
+    from one Hessian assembly and forward tangents of the gradient (vectors only), for
+    ``moore_spence_step``."""
+    energy, ell, args = data
+    model = as_model(energy)
+    m = ell.shape[0]
+    x, phi, lam = z[:m], z[m:2 * m], jnp.asarray(z[-1])
+    F, H = model.gradient_and_hessian(x, lam, args)
+    (_, Hphi), (g_lam, Hphi_lam) = jax.jvp(
+        lambda l: _directional_gradient(model, x, l, args, phi), (lam,), (jnp.ones_like(lam),))
+    R = jnp.concatenate([F, Hphi, jnp.atleast_1d(ell @ phi - 1.0)])
+    return R, FoldBlocks(H, g_lam, Hphi_lam, z)
+
+
+def moore_spence_step(blocks: FoldBlocks, rhs, data):
+    """The Moore-Spence Newton step J^-1 rhs by block elimination with the bordered matrix
+
+        C = [ H    phi ]
+            [ l^T  0   ],
+
+    which stays regular at a simple fold (H's kernel is spanned by phi, and H is
+    symmetric, so phi is not in its range), unlike H itself. With rhs = (r1, r2, r3) and
+    sigma = l . dx, the first block row gives [dx; nu] = C^-1 [r1 - F_lam dlam; sigma] with
+    the condition nu = 0, the second [dphi; mu] = C^-1 [r2 - D^3E[phi] dx - (H phi)_lam dlam;
+    r3] with mu = 0: both are linear in (dlam, sigma), which a 2 x 2 system fixes. One LU
+    of the (m + 1) matrix C, two triangular solves with three right-hand sides each, and
+    D^3E[phi] applied to three vectors (second-order tangents of the gradient) replace the
+    LU of the (2m + 1) Jacobian and the assembly of the m x m matrix D^3E[phi]; the step is
+    the same to round-off."""
+    energy, ell, args = data
+    model = as_model(energy)
+    H, g_lam, h_lam, z = blocks
+    m = H.shape[0]
+    x, phi, lam = z[:m], z[m:2 * m], z[-1]
+    dtype = H.dtype
+    C = jnp.block([[H, phi[:, None]], [ell[None, :], jnp.zeros((1, 1), dtype)]])
+    lu = dense.lu_factor(C)
+    r1, r2, r3 = rhs[:m], rhs[m:2 * m], rhs[-1]
+    zero, one = jnp.zeros((), dtype), jnp.ones((), dtype)
+    first = dense.lu_solve(lu, jnp.stack([
+        jnp.append(r1, zero), jnp.append(-g_lam, zero),
+        jnp.append(jnp.zeros_like(r1), one)], axis=1))
+    u, nu = first[:m], first[m]
+
+    def third(v):  # D^3E[phi] v = d/de H(x + e phi) v
+        return jax.jvp(lambda y: _directional_gradient(model, y, lam, args, v)[1], (x,),
+                       (phi,))[1]
+
+    Tu = jax.vmap(third, in_axes=1, out_axes=1)(u)
+    second = dense.lu_solve(lu, jnp.stack([
+        jnp.append(r2 - Tu[:, 0], r3), jnp.append(-Tu[:, 1] - h_lam, zero),
+        jnp.append(-Tu[:, 2], zero)], axis=1))
+    p, mu = second[:m], second[m]
+    # [nu1 nu2; mu1 mu2] (dlam, sigma) = -(nu0, mu0), by Cramer's rule
+    det = nu[1] * mu[2] - nu[2] * mu[1]
+    dlam = (-nu[0] * mu[2] + nu[2] * mu[0]) / det
+    sigma = (-nu[1] * mu[0] + nu[0] * mu[1]) / det
+    dx = u[:, 0] + dlam * u[:, 1] + sigma * u[:, 2]
+    dphi = p[:, 0] + dlam * p[:, 1] + sigma * p[:, 2]
+    return jnp.concatenate([dx, dphi, jnp.atleast_1d(dlam)])
 
 
 def _solve_fold(energy, x0, lam0, phi0, args, tol):

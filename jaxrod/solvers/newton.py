@@ -62,7 +62,7 @@ class _State(NamedTuple):
     k: jax.Array  # Newton steps taken
     done: jax.Array
     status: jax.Array
-    jac: jax.Array | None  # dF/dx at x (with keep_jacobian)
+    jac: Any  # dF/dx at x (with keep_jacobian), as ``linearise`` gives it
 
 
 def _norm(v):
@@ -73,7 +73,8 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
            tol: float = 1e-12, xtol: float = 1e-10, max_steps: int = 50,
            max_halvings: int = 12, stall_xtol: float = 1e-7,
            jacobian: Callable[[jax.Array, Any], jax.Array] | None = None,
-           linearise: Callable[[jax.Array, Any], tuple[jax.Array, jax.Array]] | None = None,
+           linearise: Callable[[jax.Array, Any], tuple[jax.Array, Any]] | None = None,
+           solve: Callable[[Any, jax.Array], jax.Array] | None = None,
            keep_jacobian: bool = False) -> NewtonResult:
     """Solve ``residual(x, args) = 0`` from ``x0`` (square system, x a 1-D array).
 
@@ -92,6 +93,9 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
       linearise: ``linearise(x, args)`` = (F, dF/dx) in one evaluation (where the two share
         their expensive parts); replaces ``residual`` (which may then be None) and
         ``jacobian``. The Jacobian is then also formed at a rejected trial point (rare).
+      solve: ``solve(J, b)`` = J^-1 b for what ``linearise`` returns as J (any PyTree: the
+        blocks of a structured Jacobian solved by block elimination); default a dense LU
+        solve of the matrix J.
       keep_jacobian: return dF/dx at the final x in ``jacobian`` (needs ``linearise``), so
         that a caller that needs it there (a continuation's tangent, a stability test) does
         not assemble it again.
@@ -115,6 +119,8 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         def evaluate(x):
             F, J = linearise(x, args)
             return F, lambda: J
+    if solve is None:
+        solve = jnp.linalg.solve
     dtype = x0.dtype
     min_t = 0.5**max_halvings
 
@@ -141,7 +147,7 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         at_floor = exhausted & (_norm(s.dx) <= stall_xtol * (1.0 + _norm(s.x)))
         new_direction = move & ~converged_here & (k < max_steps)
         # a new direction needs a move, so x is the trial point the Jacobian belongs to
-        dx = jax.lax.cond(new_direction, lambda: jnp.linalg.solve(jac_at(), -ft),
+        dx = jax.lax.cond(new_direction, lambda: solve(jac_at(), -ft),
                           lambda: s.dx)
         bad_direction = new_direction & ~jnp.all(jnp.isfinite(dx))
         status = jnp.where(
@@ -151,13 +157,15 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         done = converged_here | at_floor | exhausted | bad_direction | (first & ~finite) \
             | (move & (k >= max_steps))
         t = jnp.where(move, jnp.ones((), dtype), 0.5 * s.t)
-        jac = jnp.where(move, jac_at(), s.jac) if keep_jacobian else None
+        jac = (jax.tree_util.tree_map(lambda a, b: jnp.where(move, a, b), jac_at(), s.jac)
+               if keep_jacobian else None)
         return _State(x, fnorm, dx, t, k, done, status, jac)
 
-    m = x0.shape[0]
+    jac0 = (jax.tree_util.tree_map(lambda a: jnp.zeros(a.shape, a.dtype),
+                                   jax.eval_shape(lambda: linearise(x0, args)[1]))
+            if keep_jacobian else None)
     init = _State(x0, jnp.asarray(jnp.inf, dtype), jnp.zeros_like(x0), jnp.zeros((), dtype),
-                  jnp.asarray(-1), jnp.asarray(False), jnp.asarray(MAX_STEPS),
-                  jnp.zeros((m, m), dtype) if keep_jacobian else None)
+                  jnp.asarray(-1), jnp.asarray(False), jnp.asarray(MAX_STEPS), jac0)
     final = jax.lax.while_loop(lambda s: ~s.done, step, init)
     converged = final.status == CONVERGED
     return NewtonResult(final.x, converged, final.fnorm, jnp.maximum(final.k, 0), final.status,
