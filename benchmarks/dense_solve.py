@@ -1,10 +1,12 @@
 """Batched small dense solves: LAPACK's LU (``jnp.linalg.solve``, one call per matrix under
-vmap on a CPU) against Gaussian elimination with partial pivoting written in jnp (one
-vectorised rank-1 update over the whole batch per column), for the 13-50 unknowns of the
-fold systems (m + 1 for the minimally augmented system, 2m + 1 for Moore-Spence).
+vmap on a CPU) against the package's LU with partial pivoting written in jnp
+(``jaxrod.solvers.dense``, columns unrolled, rows left in place), for the 2-50 unknowns of
+the fold systems (2 for the one-mode fold, m + 1 = 13 for the bordered Moore-Spence step and
+the mode's KKT system, 2m + 1 for the assembled Moore-Spence Jacobian).
 
-The solver the package uses is the faster one on each backend measured here; on the CPU
-that is LAPACK (benchmarks/results/dense_solve.md).
+The batched fold-pair path uses the jnp LU although LAPACK is faster on a CPU at most sizes:
+LAPACK's batched LU blocks on XLA's intra-op thread pool, and two programs running at once
+(two CPU devices, or two dispatches) hang there (``jaxrod/solvers/dense.py``).
 
 Run:  python benchmarks/dense_solve.py [--quick]
 Writes benchmarks/results/dense_solve.{json,md}.
@@ -21,37 +23,11 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxrod  # noqa: F401  (float64)
+from jaxrod.programs import jit
+from jaxrod.solvers import dense
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import benchmark_main, write_results  # noqa: E402
-
-
-def eliminate(A, b):
-    """x = A^-1 b by Gaussian elimination with partial pivoting, batched over the leading
-    axes of A (..., n, n) and b (..., n) with jnp operations only."""
-    n = A.shape[-1]
-    M = jnp.concatenate([A, b[..., None]], axis=-1)
-    rows = jnp.arange(n)
-
-    def column(k, M):
-        size = jnp.where(rows >= k, jnp.abs(M[..., :, k]), -1.0)
-        pivot = jnp.argmax(size, axis=-1)
-        row_p = jnp.take_along_axis(M, pivot[..., None, None] * jnp.ones((1, n + 1), int),
-                                    axis=-2)
-        row_k = jax.lax.dynamic_slice_in_dim(M, k, 1, axis=-2)
-        is_p = (rows == pivot[..., None])[..., None]
-        M = jnp.where((rows == k)[:, None], row_p, jnp.where(is_p, row_k, M))
-        factor = jnp.where(rows > k, M[..., :, k] / M[..., k, k][..., None], 0.0)
-        return M - factor[..., :, None] * jax.lax.dynamic_slice_in_dim(M, k, 1, axis=-2)
-
-    M = jax.lax.fori_loop(0, n, column, M)
-    U, y = M[..., :n], M[..., n]
-
-    def back(i, x):
-        k = n - 1 - i
-        return x.at[..., k].set((y[..., k] - jnp.sum(U[..., k, :] * x, axis=-1)) / U[..., k, k])
-
-    return jax.lax.fori_loop(0, n, back, jnp.zeros_like(y))
 
 
 def _best(f, *args, repeat=7) -> float:
@@ -66,10 +42,10 @@ def _best(f, *args, repeat=7) -> float:
 
 def run(quick: bool) -> dict:
     rng = np.random.default_rng(0)
-    lapack = jax.jit(lambda A, b: jnp.linalg.solve(A, b[..., None])[..., 0])
-    vectorised = jax.jit(eliminate)
+    lapack = jit(lambda A, b: jnp.linalg.solve(A, b[..., None])[..., 0])
+    vectorised = jit(jax.vmap(dense.solve))
     rows = []
-    for n in (13, 25) if quick else (13, 25, 33, 50):
+    for n in (2, 13, 25) if quick else (2, 13, 25, 33, 50):
         for batch in (1000,) if quick else (1, 1000, 10000):
             for dtype in ("float64", "float32"):
                 A = rng.standard_normal((batch, n, n)) + n * np.eye(n)
@@ -86,7 +62,7 @@ def run(quick: bool) -> dict:
 
 def write(res: dict, out: Path) -> None:
     lines = ["# Batched small dense solves", "", f"Device: {res['device']}", "",
-             "| n | batch | dtype | LAPACK LU ms | jnp elimination ms | faster |",
+             "| n | batch | dtype | LAPACK LU ms | jnp LU (jaxrod.solvers.dense) ms | faster |",
              "|---|---|---|---|---|---|"]
     for r in res["rows"]:
         faster = "LAPACK" if r["lapack_s"] <= r["vectorised_s"] else "jnp"

@@ -6,9 +6,9 @@ time.
   with ``--xla_force_host_platform_device_count`` (on a CPU the virtual devices share its cores,
   so this measures the sharding's overhead, not a speed-up; on a GPU node the same code
   spreads over the real devices). Timed after a warm-up map of the same chunk shape (a
-  slightly shifted grid). On several virtual CPU devices the sharded tier can deadlock
-  inside XLA's batched LU kernel (docs/performance.md): a device count that gives no result
-  in 15 minutes is reported as such.
+  slightly shifted grid). A device count that gives no result in 15 minutes is reported as
+  such (before the batched path solved its small systems in jnp, several virtual CPU devices
+  hung inside LAPACK's batched LU: ``jaxrod/solvers/dense.py``).
 - A large map over track radius 0.095-0.14 m and E 80-250 GPa (all three solver tiers: the
   region beyond the cusp goes to the batched continuation, the magnet-touching corner is
   refused), on all local devices: wall time and points per second, compilation excluded
@@ -62,7 +62,7 @@ def _worker(x, y, chunk, warm_x, warm_y, devices=None, timeout=7200) -> dict:
         try:
             proc = subprocess.run([sys.executable, str(script)], env=env, capture_output=True,
                                   text=True, timeout=timeout)
-        except subprocess.TimeoutExpired:  # the virtual-device deadlock (module docstring)
+        except subprocess.TimeoutExpired:  # a hang (module docstring)
             return {"devices": devices or 1, "timed_out_s": timeout}
     line = [s for s in proc.stdout.splitlines() if s.startswith("JAXROD-BENCH ")]
     if proc.returncode != 0 or not line:
@@ -74,9 +74,7 @@ def run(quick: bool, points: int) -> dict:
     side = 32 if quick else 64
     bistable = (f"track-radius:0.105:0.112:{side}", f"E:150e9:250e9:{side}")
     # the warm-up is a map of the same grid shifted a little (the same programs, other
-    # values). Not a grid with points beyond the cusp: on several virtual CPU devices XLA's
-    # batched LU (LAPACK's getrf spread over the shared thread pool) has deadlocked in the
-    # sharded tier for such grids (docs/performance.md)
+    # values)
     warm = (f"track-radius:0.1051:0.1121:{side}", f"E:151e9:251e9:{side}")
     rows = []
     for d in ([1, 8] if quick else [1, 2, 4, 8]):
@@ -107,7 +105,7 @@ def markdown(res: dict) -> str:
     for r in res["throughput"]:
         if "timed_out_s" in r:
             lines.append(f"| {r['devices']} | {r['points']} | no result in "
-                         f"{r['timed_out_s']} s (deadlock) | - |")
+                         f"{r['timed_out_s']} s | - |")
         else:
             lines.append(f"| {r['devices']} | {r['points']} | {r['wall_s']:.2f} | "
                          f"{r['points_per_s']:.0f} |")
