@@ -90,10 +90,11 @@ def test_more_bracketing_cells_rescue_small_clearances():
 
 
 def test_two_programs_at_once_do_not_hang():
-    """The batched path on two CPU devices at once (and two dispatches in flight), in a
-    fresh process: with LAPACK's batched LU both programs blocked XLA's thread pool and the
-    process hung for ever; the jnp LU has no such call. Also: the two-device answers equal
-    the one-device ones."""
+    """The batched path on two CPU devices at once, with two dispatches in flight, and from
+    two threads on one device, in a fresh process: with LAPACK's batched LU the programs
+    blocked XLA's thread pool and the process hung for ever (two threads on one device: hung
+    every time tried); the jnp LU has no such call. Also: the answers equal the one-device
+    ones."""
     code = """
 import jax, numpy as np
 from jaxrod.analysis.batch import fold_pairs_program
@@ -107,9 +108,36 @@ a2, ok2 = jax.device_get(program(*inputs))
 halves = [fold_pairs_program(G[i::2], M[i::2], D[i::2]) for i in (0, 1)]  # both in flight
 a1 = np.empty((2048, 2)); a1[0::2], a1[1::2] = (np.asarray(h[0]) for h in halves)
 assert ok2.all() and np.max(np.abs(a2 - a1)) < 1e-12, np.max(np.abs(a2 - a1))
+from concurrent.futures import ThreadPoolExecutor  # two threads, one device
+with ThreadPoolExecutor(2) as pool:
+    a3 = list(pool.map(lambda i: np.asarray(fold_pairs_program(G[i::2], M[i::2], D[i::2])[0]),
+                       (0, 1, 0, 1)))
+assert np.max(np.abs(a3[0] - a1[0::2])) < 1e-12
 print("ok")
 """
     env = os.environ | {"XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
     proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                           text=True, timeout=600)
     assert proc.returncode == 0 and "ok" in proc.stdout, proc.stderr[-2000:]
+
+
+def test_near_the_cusp_a_converged_pair_is_the_pair_of_locate_folds():
+    """Random sets around the cusp in D (D = 1.3064 at the paper's G, M), E 80-250 GPa,
+    M +-10 %: every pair the batched path reports converged is the pair of the continuation
+    route (``locate_folds``), and it reports none where that route finds no pair in
+    (0, 90] degrees; the sets it misses are left to the map's retry tiers."""
+    rng = np.random.default_rng(1)
+    K = 40
+    E = rng.uniform(80, 250, K)
+    G, M = 2.2 * 200 / E, 0.0236 * 200 / E * rng.uniform(0.9, 1.1, K)
+    Ds = rng.uniform(1.27, 1.34, K)
+    alphas, converged, _ = fold_pairs(G, M, Ds)
+    alphas, converged = np.degrees(np.asarray(alphas)), np.asarray(converged)
+    assert 0.4 * K < converged.sum() < K  # both sides of the cusp are sampled
+    for i in range(K):
+        rep = magnet.locate_folds(magnet.make_scene(G[i], M[i], Ds[i]), n=16)
+        kinds = {f.kind: f.alpha_deg for f in rep.folds}
+        pair = rep.converged and {"lower", "upper"} <= kinds.keys() and kinds["upper"] <= 90
+        if converged[i]:
+            assert pair, (G[i], M[i], Ds[i])
+            assert np.max(np.abs(alphas[i] - [kinds["lower"], kinds["upper"]])) < 1e-8

@@ -74,13 +74,11 @@ def lu_solve(factors: LU, b):
         zk = _row(y, pivots[k])
         z.append(zk)
         y = y - F[:, k][:, None] * zk
-    x = [None] * n
-    for k in reversed(range(n)):  # back substitution with U
-        acc = z[k]
-        for j in range(k + 1, n):
-            acc = acc - U[k, j] * x[j]
-        x[k] = acc / U[k, k]
-    x = jnp.stack(x)
+    z = jnp.stack(z)
+    x = jnp.zeros_like(z)
+    for k in reversed(range(n)):  # back substitution with U (x[j] = 0 for j <= k so far,
+        # and U[k, j < k] is zero up to round-off: a whole-row product)
+        x = x.at[k].set((z[k] - U[k] @ x) / U[k, k])
     return x[:, 0] if vector else x
 
 
