@@ -247,7 +247,6 @@ def fold_guesses(scene: DipoleMagnet, disc: PlanarDiscretisation):
     return x, lam, phi, found
 
 
-
 def fold_angles(G, M, D, n: int = 12, tol: float = 1e-13):
     """(alpha_lower, alpha_upper) in radians and a converged flag, differentiable in G, M, D.
 

@@ -101,9 +101,9 @@ def moore_spence_blocks(z, data):
     m = ell.shape[0]
     x, phi, lam = z[:m], z[m:2 * m], jnp.asarray(z[-1])
     F, H = model.gradient_and_hessian(x, lam, args)
-    (_, Hphi), (g_lam, Hphi_lam) = jax.jvp(
-        lambda l: _directional_gradient(model, x, l, args, phi), (lam,), (jnp.ones_like(lam),))
-    R = jnp.concatenate([F, Hphi, jnp.atleast_1d(ell @ phi - 1.0)])
+    g_lam, Hphi_lam = jax.jvp(lambda l: _directional_gradient(model, x, l, args, phi), (lam,),
+                              (jnp.ones_like(lam),))[1]
+    R = jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
     return R, FoldBlocks(H, g_lam, Hphi_lam, z)
 
 

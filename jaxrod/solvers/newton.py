@@ -62,7 +62,7 @@ class _State(NamedTuple):
     k: jax.Array  # Newton steps taken
     done: jax.Array
     status: jax.Array
-    jac: Any  # dF/dx at x (with keep_jacobian), as ``linearise`` gives it
+    jac: jax.Array | None  # dF/dx at x (with keep_jacobian)
 
 
 def _norm(v):
@@ -96,7 +96,8 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
       solve: ``solve(J, b)`` = J^-1 b for what ``linearise`` returns as J (any PyTree: the
         blocks of a structured Jacobian solved by block elimination); default a dense LU
         solve of the matrix J.
-      keep_jacobian: return dF/dx at the final x in ``jacobian`` (needs ``linearise``), so
+      keep_jacobian: return dF/dx at the final x in ``jacobian`` (needs ``linearise``
+        returning the matrix, and the default ``solve``), so
         that a caller that needs it there (a continuation's tangent, a stability test) does
         not assemble it again.
 
@@ -105,8 +106,8 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
     copy of each.
     """
     x0 = jnp.asarray(x0)
-    if keep_jacobian and linearise is None:
-        raise ValueError("keep_jacobian needs linearise")
+    if keep_jacobian and (linearise is None or solve is not None):
+        raise ValueError("keep_jacobian needs linearise with a matrix Jacobian (no solve)")
     if not jnp.issubdtype(x0.dtype, jnp.floating):
         x0 = x0.astype(jnp.float64)  # float32 input stays float32 (tolerances are the caller's)
     # evaluate(x) = (F(x), J): J as a thunk, formed only inside the branch that solves with it
@@ -157,15 +158,13 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         done = converged_here | at_floor | exhausted | bad_direction | (first & ~finite) \
             | (move & (k >= max_steps))
         t = jnp.where(move, jnp.ones((), dtype), 0.5 * s.t)
-        jac = (jax.tree_util.tree_map(lambda a, b: jnp.where(move, a, b), jac_at(), s.jac)
-               if keep_jacobian else None)
+        jac = jnp.where(move, jac_at(), s.jac) if keep_jacobian else None
         return _State(x, fnorm, dx, t, k, done, status, jac)
 
-    jac0 = (jax.tree_util.tree_map(lambda a: jnp.zeros(a.shape, a.dtype),
-                                   jax.eval_shape(lambda: linearise(x0, args)[1]))
-            if keep_jacobian else None)
+    m = x0.shape[0]
     init = _State(x0, jnp.asarray(jnp.inf, dtype), jnp.zeros_like(x0), jnp.zeros((), dtype),
-                  jnp.asarray(-1), jnp.asarray(False), jnp.asarray(MAX_STEPS), jac0)
+                  jnp.asarray(-1), jnp.asarray(False), jnp.asarray(MAX_STEPS),
+                  jnp.zeros((m, m), dtype) if keep_jacobian else None)
     final = jax.lax.while_loop(lambda s: ~s.done, step, init)
     converged = final.status == CONVERGED
     return NewtonResult(final.x, converged, final.fnorm, jnp.maximum(final.k, 0), final.status,
