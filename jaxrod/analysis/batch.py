@@ -25,16 +25,26 @@ solves land on the same fold or outside (0, 90] degrees, or where a solve fails:
 
 from __future__ import annotations
 
+import math
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
+import numpy as np
 
+from jaxrod.analysis.magnet import default_options, locate_folds, run_to_second_fold
 from jaxrod.analysis.reduction import normalised_mode
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import RANGES, ParameterError, check_degree
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers import dense
-from jaxrod.solvers.folds import moore_spence_blocks, moore_spence_step
+from jaxrod.solvers.continuation import REACHED_BOUND
+from jaxrod.solvers.folds import (
+    moore_spence_blocks,
+    moore_spence_solve,
+    moore_spence_step,
+)
 from jaxrod.solvers.newton import newton
 
 #: The (q, alpha) grid that brackets the one-mode folds: q in [0, Q_MAX], alpha in [0, 90] deg.
@@ -126,6 +136,36 @@ def _sign_change(X):
     return (jnp.min(corners, 0) < 0) & (jnp.max(corners, 0) > 0)
 
 
+#: A crossed cell brackets a one-mode fold when the linearised contours F0 = 0 and
+#: dF0/dq = 0 meet within this many cell widths of its centre (0.5: inside the cell).
+REACH = 1.0
+
+
+def _cell_linearisation(F, Fq):
+    """Each cell's centre values and cell-width differences of F0 and dF0/dq, and the
+    crossing (dq, dalpha) of the two linearised contours from the centre, in cell widths:
+
+        [F_q  F_a ] [dq]      [F ]
+        [Fq_q Fq_a] [da]  = - [Fq]     (centre values, differences across the cell).
+
+    Two contours that both cross a cell need not meet in it (they run side by side near
+    q = 0 and near the cusp); the crossing's distance tells the cells that bracket a fold
+    from those that only touch both contours."""
+    def parts(X):
+        centre = 0.25 * (X[:-1, :-1] + X[1:, :-1] + X[:-1, 1:] + X[1:, 1:])
+        d_q = 0.5 * (X[:-1, 1:] + X[1:, 1:] - X[:-1, :-1] - X[1:, :-1])
+        d_a = 0.5 * (X[1:, :-1] + X[1:, 1:] - X[:-1, :-1] - X[:-1, 1:])
+        return centre, d_q, d_a
+
+    f, f_q, f_a = parts(F)
+    g, g_q, g_a = parts(Fq)
+    det = f_q * g_a - f_a * g_q
+    safe = jnp.where(det == 0.0, 1.0, det)
+    dq = jnp.where(det == 0.0, jnp.inf, -(f * g_a - f_a * g) / safe)
+    da = jnp.where(det == 0.0, jnp.inf, -(f_q * g - f * g_q) / safe)
+    return dq, da
+
+
 def _crossed_cell(crossed, rank):
     """(alpha row, q column) of the crossed cell of the given rank (row-major, from 0) in the
     boolean grid ``crossed``: counts per row and their running sums locate the row, the
@@ -139,6 +179,23 @@ def _crossed_cell(crossed, rank):
     before = jnp.sum(jnp.where(rows < r, per_row, 0))
     c = jnp.minimum(jnp.sum(jnp.cumsum(row) <= rank - before), crossed.shape[1] - 1)
     return r, c
+
+
+def _cell_starts(crossed, cells: int, dq, dalpha):
+    """(2 cells, 2) one-mode starts (q, alpha) at the centres of the first and the last
+    ``cells`` crossed cells (row-major, the last among the first CANDIDATES); NaN for a slot
+    without a cell (a batch runs its Newton loops until the slowest element is done: a NaN
+    start ends its solve at the first pass)."""
+    count = jnp.sum(crossed)
+    k = jnp.arange(cells)
+    slot = jnp.concatenate([k, count - cells + k])
+    used = (slot >= 0) & (slot < count)
+    ia, iq = jax.vmap(lambda rank: _crossed_cell(crossed, rank))(
+        jnp.clip(slot, 0, CANDIDATES - 1))
+    # the cells' centres (the grids are uniform from 0: no gather of the grid values)
+    start = jnp.stack([(iq + 0.5).astype(dq.dtype) * dq, (ia + 0.5).astype(dq.dtype) * dalpha],
+                      axis=1)
+    return jnp.where(used[:, None], start, jnp.nan)
 
 
 def _canonical(z, m):
@@ -173,22 +230,14 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation, cells: int = 1):
     al = jnp.linspace(0.0, 0.5 * jnp.pi, GRID_ALPHA, dtype=dtype)
     moments = _one_mode_moments(qs, psi_q, disc, *_grid_sines(qs[1], GRID_Q, psi_q))
     F0, F0q = _one_mode_derivatives(qs, moments, al[:, None], bend, scene)
-    cells_crossed = _sign_change(F0) & _sign_change(F0q)
+    dq, da = _cell_linearisation(F0, F0q)
+    touched = _sign_change(F0) & _sign_change(F0q)
+    bracketing = touched & (jnp.abs(dq) <= REACH) & (jnp.abs(da) <= REACH)
     # the first and the last ``cells`` of the grid cells that both contours cross
-    # (row-major: alpha first) start one-mode Newton solves; the converged one-mode folds of
-    # smallest and largest alpha are the lower and the upper one
-    count = jnp.sum(cells_crossed)
-    k = jnp.arange(cells)
-    slot = jnp.concatenate([k, count - cells + k])
-    used = (slot >= 0) & (slot < count)
-    ia, iq = jax.vmap(lambda rank: _crossed_cell(cells_crossed, rank))(
-        jnp.clip(slot, 0, CANDIDATES - 1))
-    # the cells' centres (the grids are uniform from 0: no gather of qs and al)
-    start = jnp.stack([(iq + 0.5).astype(dtype) * qs[1], (ia + 0.5).astype(dtype) * al[1]],
-                      axis=1)
-    # a batch runs its Newton loops until the slowest element is done: unused slots (and an
-    # element without brackets) start from NaN, which ends their solves at the first pass
-    start = jnp.where(used[:, None], start, jnp.nan)
+    # (row-major: alpha first), and of those where they meet, start one-mode Newton solves;
+    # the converged one-mode folds of smallest and largest alpha are the lower and the upper
+    start = jnp.concatenate([_cell_starts(touched, cells, qs[1], al[1]),
+                             _cell_starts(bracketing, cells, qs[1], al[1])])
 
     def one_mode(x0):
         residual = lambda x, _: jnp.stack(_one_mode_derivatives(
@@ -244,10 +293,147 @@ def cast(disc: PlanarDiscretisation, dtype) -> PlanarDiscretisation:
 DTYPES = ("float64", "float32")
 
 
-def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64"):
-    """Fold pairs for arrays G, M, D (same shape K): (alphas (K, 2) radians, NaN where not
-    converged; converged (K,); max Moore-Spence iterations (K,)). Compiled once per
-    (n, dtype, K) (``fold_pairs_program``, which skips the checks).
+# --- what a parameter set's answer is ------------------------------------------------------
+
+#: A parameter set's answer: its two folds, a certificate that there are none, or that no
+#: solver converged. "Not converged" is never "not bistable".
+BISTABLE, NOT_BISTABLE, FOLD_BEYOND_90, INVALID_INPUT, NOT_CONVERGED = 0, 1, 2, 3, 4
+STATUS = {BISTABLE: "bistable: both folds in (0, 90] degrees",
+          NOT_BISTABLE: "not bistable: fewer than two folds on the branch through the "
+          "straight rod (continuation to 180 degrees)",
+          FOLD_BEYOND_90: "a fold lies beyond 90 degrees (outside the magnet's sweep)",
+          INVALID_INPUT: "invalid input: the magnet would touch the rod, or an input is not "
+          "positive",
+          NOT_CONVERGED: "no solver converged (one-mode brackets, wider brackets, batched "
+          "continuation and locate_folds): not known whether the set is bistable"}
+
+#: Bracketing cells per end that the second tier solves from (``fold_pair_states``).
+RETRY_CELLS = 4
+#: Capacity of the continuation tier (alpha up to 180 degrees, two folds).
+RETRY_CAPACITY = 160
+
+
+class FoldPairs(NamedTuple):
+    """Fold pairs of K parameter sets.
+
+    alpha_deg: (K, 2) lower and upper fold (magnet angles, degrees), NaN unless bistable;
+    bistable: (K,) status == BISTABLE; status: (K,) codes of ``STATUS``; tier: (K,) the
+    tier that answered (1 the one-mode brackets, 2 wider brackets, 3 the batched
+    continuation, 4 ``locate_folds``); iterations: (K,) Moore-Spence iterations of tier 1.
+    """
+
+    alpha_deg: np.ndarray
+    bistable: np.ndarray
+    status: np.ndarray
+    tier: np.ndarray
+    iterations: np.ndarray
+
+    def messages(self) -> list[str]:
+        """The status of each set in words."""
+        return [STATUS[int(c)] for c in self.status]
+
+
+def bucket(k: int) -> int:
+    """The padded size of a batch of k: powers of two up to 8, then m 2^j with m in 8..15
+    (at most 1/8 of padding): programs compile once per bucket, not per batch size."""
+    if k <= 8:
+        return 1 << max(k - 1, 0).bit_length()
+    j = (k - 1).bit_length() - 4
+    return -(-k // (1 << j)) * (1 << j)
+
+
+def padded(arrays, size: int | None = None):
+    """The 1-D arrays padded to ``size`` (default ``bucket``) by repeating their first entry
+    (a valid parameter set; the padding's answers are dropped)."""
+    k = arrays[0].shape[0]
+    size = bucket(k) if size is None else size
+    return [np.concatenate([a, np.repeat(a[:1], size - k)]) for a in arrays]
+
+
+def continuation_pair(G, M, D, disc: PlanarDiscretisation):
+    """(fold states (2, 2m + 1), status) of one parameter set by the ``locate_folds``
+    algorithm (vmap it): the continuation in alpha from the straight rod up to 180 degrees
+    that stops after two folds (``run_to_second_fold``), then Moore-Spence at both. Fewer
+    than two folds when the run reaches its bound certifies NOT_BISTABLE."""
+    scene = DipoleMagnet(G, M, D, 0.0)
+    args = (scene, disc)
+    raw, theta, alpha, phi, folds = run_to_second_fold(scene, disc, jnp.pi, RETRY_CAPACITY)
+    started = raw.residual_norm[0] <= default_options().tol
+
+    def refine(theta, alpha, phi):
+        fp = moore_spence_solve(ALPHA_MODEL, theta, alpha, phi, args)
+        z = jnp.concatenate([fp.x, fp.null_vector, jnp.atleast_1d(fp.lam)])
+        return z, fp.newton.converged
+
+    z, ok = jax.vmap(refine)(theta, alpha, phi)
+    z = z[jnp.argsort(z[:, -1])]
+    alphas = z[:, -1]
+    two = started & (folds >= 2)
+    solved = two & jnp.all(ok) & (alphas[0] > 0.0) & (alphas[1] - alphas[0] > 1e-9)
+    beyond = solved & (alphas[1] > 0.5 * jnp.pi)
+    ended = raw.status == REACHED_BOUND  # the run went to its bound: its fold count is final
+    status = jnp.where(solved, jnp.where(beyond, FOLD_BEYOND_90, BISTABLE),
+                       jnp.where(started & ~two & ended, NOT_BISTABLE, NOT_CONVERGED))
+    return z, status
+
+
+@jit(static_argnames=("n", "cells"))
+def _wider_program(G, M, D, n: int, cells: int):
+    disc = planar_discretisation(n, "clamped")
+    z, converged, _ = jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc, cells))(G, M, D)
+    return z, converged
+
+
+@jit(static_argnames=("n",))
+def _continuation_program(G, M, D, n: int):
+    disc = planar_discretisation(n, "clamped")
+    return jax.vmap(lambda g, m, d: continuation_pair(g, m, d, disc))(G, M, D)
+
+
+def resolve_failures(G, M, D, z, status, tier, n: int = 12):
+    """Tiers 2 to 4 for the sets whose ``status`` is NOT_CONVERGED (arrays on the host,
+    updated in place; z the (K, 2, 2m + 1) fold states): the one-mode brackets from
+    RETRY_CELLS cells per end, then the batched continuation from the straight rod (which
+    also certifies NOT_BISTABLE and FOLD_BEYOND_90), then ``locate_folds`` one by one. The
+    batched tiers run in float64 on padded batches (``bucket``)."""
+    retry = np.nonzero(status == NOT_CONVERGED)[0]
+    if retry.size:  # tier 2
+        z2, ok2 = jax.device_get(_wider_program(*padded([G[retry], M[retry], D[retry]]),
+                                                n=n, cells=RETRY_CELLS))
+        z2, ok2 = np.asarray(z2)[:retry.size], np.asarray(ok2)[:retry.size]
+        z[retry[ok2]], status[retry[ok2]], tier[retry] = z2[ok2], BISTABLE, 2
+        retry = retry[~ok2]
+    if retry.size:  # tier 3
+        z3, code = jax.device_get(_continuation_program(
+            *padded([G[retry], M[retry], D[retry]]), n=n))
+        z3, code = np.asarray(z3)[:retry.size], np.asarray(code)[:retry.size]
+        z[retry], status[retry], tier[retry] = z3, code, 3
+        retry = retry[code == NOT_CONVERGED]
+    if retry.size:  # tier 4: one by one
+        for i in retry:
+            rep = locate_folds(DipoleMagnet(G[i], M[i], D[i], 0.0), n=max(n, 16))
+            tier[i] = 4
+            kinds = {f.kind: f for f in rep.folds}
+            if rep.converged and "lower" in kinds and "upper" in kinds:
+                z[i, :, -1] = np.radians([kinds["lower"].alpha_deg, kinds["upper"].alpha_deg])
+                z[i, :, :-1] = np.nan  # (a state of degree 16, not n: the angles only)
+                status[i] = FOLD_BEYOND_90 if z[i, 1, -1] > 0.5 * math.pi else BISTABLE
+            elif rep.branch.complete and not rep.problems and len(rep.folds) < 2:
+                status[i] = NOT_BISTABLE
+    return z, status, tier
+
+
+def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64") -> FoldPairs:
+    """Fold pairs for arrays G, M, D (same shape K), in degrees, each with its status
+    (``FoldPairs``): no parameter set is left without an answer that says what it is.
+
+    Tier 1 is the fixed-cost batched path (one-mode brackets and Moore-Spence, module
+    docstring; ``fold_pairs_program``, in ``dtype``); the sets it does not converge go
+    through ``resolve_failures`` (wider brackets, the batched continuation from the straight
+    rod, ``locate_folds``), which either finds their folds or certifies that there are no two
+    (NOT_BISTABLE) or that one lies beyond 90 degrees. NOT_CONVERGED remains only where every
+    solver failed. Batches are padded to a few sizes (``bucket``), so that a new K rarely
+    compiles a new program.
 
     The rows are validated first: a row outside ``jaxrod.params.RANGES`` (or NaN) raises
     ParameterError naming it. Matrix products run at full precision of ``dtype`` (GPUs
@@ -259,20 +445,39 @@ def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64"):
     """
     if dtype not in DTYPES:
         raise ParameterError(f"dtype must be one of {DTYPES}, got {dtype!r}")
-    check_degree(n, "N-magnet")
+    n = check_degree(n, "N-magnet")
     G, M, D = (RANGES[k].check_rows(v) for k, v in (("G-magnet", G), ("M", M), ("D", D)))
     if not G.ndim == 1 or G.shape != M.shape or G.shape != D.shape:
         raise ParameterError(f"G, M, D must be 1-d arrays of one length, got shapes "
                              f"{G.shape}, {M.shape}, {D.shape}")
-    return fold_pairs_program(G, M, D, n=n, dtype=dtype)
+    G, M, D = (np.asarray(v, np.float64) for v in (G, M, D))
+    k = G.shape[0]
+    if k == 0:
+        empty = np.zeros(0, np.int8)
+        return FoldPairs(np.zeros((0, 2)), np.zeros(0, bool), empty, empty, empty)
+    z, ok, iterations = jax.device_get(fold_pairs_program(*padded([G, M, D]), n=n,
+                                                          dtype=dtype, states=True))
+    z = np.array(z[:k], np.float64)
+    ok, iterations = np.asarray(ok[:k]), np.asarray(iterations[:k])
+    status = np.where(ok, BISTABLE, NOT_CONVERGED).astype(np.int8)
+    tier = np.ones(k, np.int8)
+    _, status, tier = resolve_failures(G, M, D, z, status, tier, n)
+    alphas = np.where((status == BISTABLE)[:, None], np.degrees(z[:, :, -1]), np.nan)
+    return FoldPairs(alphas, status == BISTABLE, status, tier, iterations)
 
 
-@jit(static_argnames=("n", "dtype"))
-def fold_pairs_program(G, M, D, n: int = 12, dtype: str = "float64"):
-    """``fold_pairs`` without the input checks: the compiled program itself (``.lower``)."""
+@jit(static_argnames=("n", "dtype", "states"))
+def fold_pairs_program(G, M, D, n: int = 12, dtype: str = "float64", states: bool = False):
+    """Tier 1 of ``fold_pairs`` alone, without the input checks and the fallback tiers: the
+    compiled program itself (``.lower``). Returns (alphas (K, 2) radians, NaN where not
+    converged; converged (K,); Moore-Spence iterations (K,)), or with ``states`` the fold
+    states (K, 2, 2m + 1) in place of the angles. ``converged`` False means that this path
+    found no pair, not that there is none (``fold_pairs`` says which)."""
     disc = cast(planar_discretisation(n, "clamped"), dtype)
     G, M, D = (jnp.asarray(v, dtype) for v in (G, M, D))
     with jax.default_matmul_precision("highest"):
-        alphas, converged, iterations = jax.vmap(
-            lambda g, m, d: fold_pair_one(g, m, d, disc))(G, M, D)
-    return jnp.where(converged[:, None], alphas, jnp.nan), converged, iterations
+        z, converged, iterations = jax.vmap(
+            lambda g, m, d: fold_pair_states(g, m, d, disc))(G, M, D)
+    if states:
+        return z, converged, iterations
+    return jnp.where(converged[:, None], z[:, :, -1], jnp.nan), converged, iterations

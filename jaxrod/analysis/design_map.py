@@ -3,18 +3,18 @@ a grid, chunked on disk, resumable, sharded over devices and processes.
 
 A map varies two inputs of a ``DesignPoint`` (groups or physical inputs, the others fixed)
 over a grid ``name:start:stop:count`` each. Every grid point goes through up to four
-tiers, so no point is dropped silently:
+tiers, those of ``jaxrod.analysis.batch.fold_pairs``, so no point is dropped silently:
 
 1. the batched fold-pair path (``jaxrod.analysis.batch.fold_pair_states``: one-mode brackets
    and Moore-Spence, fixed cost per point), vmapped over a chunk;
 2. points it does not converge are retried by the same path started from more bracketing
-   cells (``RETRY_CELLS`` at each end instead of one: the small clearances);
+   cells (``batch.RETRY_CELLS`` at each end instead of one: the small clearances);
 3. points still failing are retried by a batched continuation from the straight rod
    (the ``locate_folds`` algorithm, vmapped: pseudo-arclength in alpha up to 180 degrees,
    the first two folds refined by Moore-Spence), which also tells why there is no pair;
 4. points still failing there are retried by ``locate_folds`` itself, one by one.
 
-The retry tiers run on padded batches (powers of two), so that a map compiles each of their
+The retry tiers run on padded batches (``batch.bucket``), so that a map compiles each of their
 programs a few times, not once per number of failures.
 
 Each point ends with a reason code (``REASONS``): OK, NOT_BISTABLE (the branch through the
@@ -50,10 +50,18 @@ import tempfile
 from pathlib import Path
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.analysis.batch import fold_pair_states
+from jaxrod.analysis.batch import (  # noqa: F401 (the reason codes, re-exported)
+    BISTABLE,
+    FOLD_BEYOND_90,
+    INVALID_INPUT,
+    NOT_BISTABLE,
+    NOT_CONVERGED,
+    STATUS,
+    fold_pair_states,
+    resolve_failures,
+)
 from jaxrod.analysis.fold_curves import (
     DesignPoint,
     find_cusp,
@@ -61,23 +69,13 @@ from jaxrod.analysis.fold_curves import (
     groups_of,
     range_of,
 )
-from jaxrod.analysis.magnet import default_options, locate_folds, run_to_second_fold
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import UNITS, ParameterError
 from jaxrod.programs import jit
 from jaxrod.progress import progress_bar
-from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
-from jaxrod.solvers.folds import moore_spence_solve
 
-OK, NOT_BISTABLE, FOLD_BEYOND_90, INVALID_INPUT, NOT_CONVERGED = 0, 1, 2, 3, 4
-REASONS = {OK: "bistable: both folds in (0, 90] degrees",
-           NOT_BISTABLE: "not bistable: fewer than two folds on the branch through the "
-           "straight rod",
-           FOLD_BEYOND_90: "a fold lies beyond 90 degrees (outside the magnet's sweep)",
-           INVALID_INPUT: "invalid input: the magnet would touch the rod, or an input is not "
-           "positive",
-           NOT_CONVERGED: "no solver converged (batched path, batched continuation and "
-           "locate_folds)"}
+#: The reason codes of a map's points: ``jaxrod.analysis.batch.STATUS`` (OK is BISTABLE).
+OK, REASONS = BISTABLE, STATUS
 VARIABLES = ("capture_deg", "release_deg", "width_deg", "reason")
 #: Chebyshev degree of the map's solves (the batched path's default: the fold angles reach
 #: their round-off floor from N = 12 at the paper's parameters).
@@ -148,61 +146,13 @@ def _validity(point: DesignPoint, values: np.ndarray) -> np.ndarray:
                 & range_of("D").contains(D) & (D > 1.0 + radius))
 
 
-# --- tiers 1 to 3: batched solves over a chunk ---------------------------------------------
-
-#: Capacity of the retry continuation (alpha up to 180 degrees, two folds).
-RETRY_CAPACITY = 160
+# --- tier 1 sharded over devices; tiers 2 to 4 are ``batch.resolve_failures`` -----------
 
 
-def _retry_one(G, M, D, disc):
-    """(alphas (2,), code) from a continuation in alpha from the straight rod (0 to 180
-    degrees, stopping after two folds) and Moore-Spence at its first two folds."""
-    scene = DipoleMagnet(G, M, D, 0.0)
-    args = (scene, disc)
-    raw, theta, alpha, phi, folds = run_to_second_fold(scene, disc, math.pi, RETRY_CAPACITY)
-    started = raw.residual_norm[0] <= default_options().tol
-
-    def refine(theta, alpha, phi):
-        fp = moore_spence_solve(ALPHA_MODEL, theta, alpha, phi, args)
-        return fp.lam, fp.newton.converged
-
-    alphas, ok = jax.vmap(refine)(theta, alpha, phi)
-    alphas = jnp.sort(alphas)
-    two = started & (folds >= 2)
-    solved = two & jnp.all(ok) & (alphas[1] - alphas[0] > 1e-9)
-    beyond = solved & (alphas[1] > 0.5 * math.pi)
-    # fewer than two folds: not bistable if the run ended normally (bound reached)
-    ended = raw.status == 1
-    code = jnp.where(solved, jnp.where(beyond, FOLD_BEYOND_90, OK),
-                     jnp.where(started & ~two & ended, NOT_BISTABLE, NOT_CONVERGED))
-    return alphas, code
-
-
-#: Bracketing cells per end that the second tier solves from (``fold_pair_states``).
-RETRY_CELLS = 4
-
-
-def _chunk_program(G, M, D, n, cells=1):
+def _chunk_program(G, M, D, n):
     disc = planar_discretisation(n, "clamped")
-    z, converged, _ = jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc, cells))(G, M, D)
-    return z[:, :, -1], converged
-
-
-def _retry_program(G, M, D, n):
-    disc = planar_discretisation(n, "clamped")
-    return jax.vmap(lambda g, m, d: _retry_one(g, m, d, disc))(G, M, D)
-
-
-_wider = jit(_chunk_program, static_argnames=("n", "cells"))
-_retry = jit(_retry_program, static_argnames=("n",))
-
-
-def _bucketed(arrays):
-    """The 1-D arrays padded (repeating their first entry) to the next power of two, at
-    least 8: the retry tiers compile once per bucket, not once per number of failures."""
-    k = arrays[0].shape[0]
-    size = max(8, 1 << (k - 1).bit_length())
-    return [np.concatenate([a, np.repeat(a[:1], size - k)]) for a in arrays]
+    z, converged, _ = jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc))(G, M, D)
+    return z, converged
 
 
 @functools.lru_cache(maxsize=16)
@@ -239,41 +189,18 @@ def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
     stand_in = values[np.argmax(valid)] if valid.any() else np.asarray(point.values)
     g0, m0, d0 = (float(v) for v in groups_of(point.kind, stand_in))
     G, M, D = (np.where(valid, v, s) for v, s in ((G, g0), (M, m0), (D, d0)))
-    alphas = np.full((k, 2), np.nan)
+    z = np.full((k, 2, 2 * planar_discretisation(n, "clamped").size + 1), np.nan)
     reason = np.where(valid, NOT_CONVERGED, INVALID_INPUT).astype(np.int8)
     if valid.any():
         program, mesh = _per_device(tuple(devices), n)
         inputs, _ = _sharded([G, M, D], mesh)
-        a, ok = jax.device_get(program(*inputs))
-        a, ok = np.asarray(a)[:k], np.asarray(ok)[:k] & valid
-        alphas[ok] = a[ok]
+        z1, ok = jax.device_get(program(*inputs))
+        z1, ok = np.asarray(z1)[:k], np.asarray(ok)[:k] & valid
+        z[ok] = z1[ok]
         reason[ok] = OK
-        retry = np.nonzero(valid & ~ok)[0]
-        if retry.size:  # tier 2, on one device (a small share of a map)
-            with jax.default_device(devices[0]):
-                a1, ok1 = jax.device_get(_wider(*_bucketed([G[retry], M[retry], D[retry]]),
-                                                n=n, cells=RETRY_CELLS))
-            a1, ok1 = np.asarray(a1)[:retry.size], np.asarray(ok1)[:retry.size]
-            alphas[retry[ok1]] = a1[ok1]
-            reason[retry[ok1]] = OK
-            retry = retry[~ok1]
-        if retry.size:  # tier 3
-            with jax.default_device(devices[0]):
-                a2, code = jax.device_get(_retry(*_bucketed([G[retry], M[retry], D[retry]]),
-                                                 n=n))
-            a2, code = np.asarray(a2)[:retry.size], np.asarray(code)[:retry.size]
-            good = code == OK
-            alphas[retry[good]] = a2[good]
-            reason[retry] = code
-            for i in retry[code == NOT_CONVERGED]:  # tier 4: one by one
-                rep = locate_folds(DipoleMagnet(G[i], M[i], D[i], 0.0), n=max(n, 16))
-                kinds = {f.kind: f for f in rep.folds}
-                if rep.converged and "lower" in kinds and "upper" in kinds:
-                    alphas[i] = [math.radians(kinds["lower"].alpha_deg),
-                                 math.radians(kinds["upper"].alpha_deg)]
-                    reason[i] = OK
-                elif rep.branch.complete and len(rep.folds) < 2:
-                    reason[i] = NOT_BISTABLE
+        with jax.default_device(devices[0]):  # the retry tiers: a small share of a map
+            resolve_failures(G, M, D, z, reason, np.ones(k, np.int8), n)
+    alphas = np.where((reason == OK)[:, None], z[:, :, -1], np.nan)
     deg = np.degrees(alphas)
     return {"capture_deg": deg[:, 0], "release_deg": deg[:, 1],
             "width_deg": deg[:, 1] - deg[:, 0], "reason": reason}

@@ -23,8 +23,8 @@ p = p0 + P u with P = (J0^T J0)^(-1/2) from the first Jacobian, so that the firs
 is the Gauss-Newton step.
 
 The fold model tracks the folds: the folds at the starting modulus come from the one-mode
-brackets and Moore-Spence (``jaxrod.analysis.batch.fold_pair_states``, no continuation), and
-every later evaluation solves each fold's Moore-Spence system from the folds of the last
+brackets and Moore-Spence where they succeed, else from a continuation from the straight rod
+(``jaxrod.analysis.calibration.start_states``, the calibration's start), and every later evaluation solves each fold's Moore-Spence system from the folds of the last
 accepted point (``tracked_angles``; the folds move smoothly with E). Residuals, their
 Jacobian and the gradient J^T r come from one forward-mode pass at one place in the loop
 (implicit differentiation of the Moore-Spence systems), and a trial point where a solve
@@ -43,7 +43,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.analysis.batch import fold_pair_states
 from jaxrod.analysis.calibration import (
     ANGLE_NAMES,
     OFFSET,
@@ -52,6 +51,7 @@ from jaxrod.analysis.calibration import (
     parameter_names,
     physical_parameters,
     solve_program,
+    start_states,
 )
 from jaxrod.analysis.fold_curves import DesignPoint, range_of
 from jaxrod.analysis.magnet import fold_angles
@@ -149,7 +149,7 @@ def _fit_core(measured, mask, sigma, fit_offset, setup: FitSetup, log_e0, max_it
     free = jnp.stack([jnp.ones(()), offset_free])
     disc = planar_discretisation(FIT_N, "clamped")
     start = _scene(jnp.asarray(log_e0, jnp.float64), setup)
-    z0, found, _ = fold_pair_states(start.G, start.M, start.D, disc)
+    z0, found = start_states(start, disc)
     target = jnp.where(mask, measured, 0.0)
 
     def residuals(p, z):
