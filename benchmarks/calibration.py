@@ -41,8 +41,8 @@ def experiments(K: int, seed: int = 1):
     values[:, 6] = rng.normal(PRIOR["remanence"].mean, PRIOR["remanence"].sd, K)
     offsets = rng.uniform(-2.0, 2.0, K)
     G, M, D = groups_of("physical", values.T)
-    alphas, converged, _ = jr.fold_pairs(G, M, D)
-    a = np.degrees(np.asarray(alphas))
+    pairs = jr.fold_pairs(G, M, D)
+    a, converged = pairs.alpha_deg, pairs.bistable
     clean = np.stack([-a[:, 0], a[:, 1], a[:, 0], -a[:, 1]], axis=1) + offsets[:, None]
     noisy = clean + NOISE_DEG * rng.normal(size=clean.shape)
     truth = {"E": values[:, 0], "remanence": values[:, 6], "offset": offsets}

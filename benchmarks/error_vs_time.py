@@ -114,8 +114,8 @@ def run(quick: bool, auto: bool) -> dict:
             (alphas, ok), t = best_time(lambda: jr.fold_pair(scene, n=n), repeat)
             _, td = best_time(lambda: jr.diagram(scene, n), max(3, repeat // 4))
             add("jaxrod Moore-Spence (fold_pair)", f"N={n}", alphas, t, td)
-            (a, c, _), t = best_time(lambda: jr.fold_pairs([G], [M], [D_EXP], n=n), repeat)
-            add("jaxrod batch path (fold_pairs, K=1)", f"N={n}", np.degrees(np.asarray(a)[0]), t)
+            pairs, t = best_time(lambda: jr.fold_pairs([G], [M], [D_EXP], n=n), repeat)
+            add("jaxrod batch path (fold_pairs, K=1)", f"N={n}", pairs.alpha_deg[0], t)
         for n in ns_reduced:
             folds, t = best_time(lambda: jr.reduced_folds(scene, n=n), max(3, repeat // 4))
             add("jaxrod reduced route", f"N={n}", [f.alpha_deg for f in folds], t)

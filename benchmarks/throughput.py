@@ -79,9 +79,8 @@ def run(ks, quick: bool) -> dict:
         for K in ks:
             G, M, D = parameter_sets(K)
             repeat = 3 if K <= 10_000 else 1
-            (alphas, conv, iters), first, best = timed(
-                lambda: jr.fold_pairs(G, M, D, dtype=dtype), repeat)
-            deg = np.degrees(np.asarray(alphas, dtype=np.float64))
+            res, first, best = timed(lambda: jr.fold_pairs(G, M, D, dtype=dtype), repeat)
+            deg, conv, iters = res.alpha_deg, res.bistable, res.iterations
             row = {"dtype": dtype, "K": K, "compile_plus_first_s": first, "warm_s": best,
                    "pairs_per_s": K / best, "converged_fraction": float(np.mean(conv)),
                    "max_newton_iterations": int(np.max(iters)),
@@ -107,8 +106,7 @@ def run(ks, quick: bool) -> dict:
 
 def reference_for(K: int) -> np.ndarray:
     G, M, D = parameter_sets(K)
-    alphas, _, _ = jr.fold_pairs(G, M, D)
-    return np.degrees(np.asarray(alphas))
+    return jr.fold_pairs(G, M, D).alpha_deg
 
 
 def markdown(res: dict) -> str:

@@ -9,10 +9,30 @@ imports only what a command needs). Importing jaxrod switches JAX to float64.
 from __future__ import annotations
 
 import importlib
+import importlib.metadata
+import sys
 
-import jax
+from jaxrod import progress as _progress
+
+# a Ctrl-C while JAX is imported could be swallowed in one of its garbage-collection
+# callbacks: it is recorded instead and raised once the import is complete; when the command
+# line is starting (``python -m jaxrod.cli``, the ``jaxrod`` command), Ctrl-C stays recorded
+# until its command starts, which raises it, to exit with 130 and one line
+_command_line = sys.argv[:1] == ["-m"] or sys.argv[0].endswith(("/jaxrod", "\\jaxrod.exe")) \
+    or sys.argv[:1] == ["jaxrod"]
+with _progress.ctrl_c_guard(defer=True):
+    import jax
+if _command_line:
+    _progress.defer_from_now()
+else:
+    _progress.raise_pending()
 
 jax.config.update("jax_enable_x64", True)
+
+try:
+    __version__ = importlib.metadata.version("jaxrod")
+except importlib.metadata.PackageNotFoundError:  # a source tree that was not installed
+    __version__ = "unknown"
 
 #: The public names, by section of the API reference: public name -> (module, attribute).
 #: The documentation's API pages are generated from this table, in this order.
@@ -73,6 +93,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "fold_pair": ("jaxrod.analysis.magnet", "fold_pair"),
         "fold_angles": ("jaxrod.analysis.magnet", "fold_angles"),
         "fold_pairs": ("jaxrod.analysis.batch", "fold_pairs"),
+        "FoldPairs": ("jaxrod.analysis.batch", "FoldPairs"),
         "sweep": ("jaxrod.analysis.magnet", "hysteresis_sweep"),
         "square_root_law": ("jaxrod.analysis.magnet", "square_root_law"),
         "conditioning_near_fold": ("jaxrod.analysis.conditioning", "conditioning_near_fold"),
@@ -107,6 +128,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "default_point": ("jaxrod.analysis.fit", "default_point"),
         "fit_youngs_modulus": ("jaxrod.analysis.fit", "fit_youngs_modulus"),
         "fit_batch": ("jaxrod.analysis.fit", "fit_batch"),
+        "FitSetup": ("jaxrod.analysis.fit", "FitSetup"),
         "design": ("jaxrod.analysis.design", "design"),
     },
     "Figures": {

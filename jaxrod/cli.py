@@ -32,6 +32,7 @@ from jaxrod.params import (
     check_degree,
     preset,
 )
+from jaxrod.progress import ctrl_c_guard
 
 
 def _enable_compilation_cache() -> None:
@@ -1252,7 +1253,8 @@ def main(argv: list[str] | None = None) -> int:
         args.n = args.n_fallback if args.n is None else args.n
     _enable_compilation_cache()
     try:
-        return args.func(args)
+        with ctrl_c_guard():
+            return args.func(args)
     except ParameterError as err:
         print(f"jaxrod {args.command}: error: {err}", file=sys.stderr)
         return 2

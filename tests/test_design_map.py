@@ -202,3 +202,45 @@ def test_fold_crossings_bound_the_region_beyond_90_degrees():
     crossings = fold_crossings(spec, data)
     assert len(crossings) == 1
     assert x.values()[last_beyond] < crossings[0]["track-radius"] < x.values()[last_beyond + 1]
+
+
+#: A longer map for the Ctrl-C test: 100 chunks of 16 points (about 0.2 s a chunk, warm).
+LONG_MAP = [sys.executable, "-m", "jaxrod.cli", "map", "--G", "2.2", "--M", "0.0236",
+            "--D", "1.2", "--x", "D:1.1:1.3:40", "--y", "M:0.02:0.03:40", "--chunk", "4",
+            "--quiet", "--no-plot"]
+
+
+@pytest.mark.xdist_group("sigint")
+def test_ctrl_c_at_ten_moments_exits_130_and_keeps_the_finished_chunks(tmp_path):
+    """SIGINT to ``jaxrod map`` at ten moments (during start-up, during the first chunk's
+    compilation, and after 1 to 60 finished chunks): exit 130 every time, with one line
+    on stderr, soon (no run goes on to the end: a Ctrl-C swallowed in a garbage-collection
+    callback did that), and every chunk marked complete readable with its four variables."""
+    chunk_files = lambda out: [f for f in (out / "reason").glob("*") if f.name[0].isdigit()]
+    for i, (delay, after) in enumerate([(1.0, 0), (4.0, 0), (0, 1), (0, 2), (0, 3), (0, 6),
+                                        (0, 10), (0, 20), (0, 35), (0, 60)]):
+        out = tmp_path / f"map{i}"
+        proc = subprocess.Popen([*LONG_MAP, "--out", str(out)], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.PIPE, text=True)
+        time.sleep(delay)
+        deadline = time.monotonic() + 300
+        while after and time.monotonic() < deadline and proc.poll() is None:
+            if (out / "reason").exists() and len(chunk_files(out)) >= after:
+                break
+            time.sleep(0.01)
+        assert proc.poll() is None, f"moment {i}: the map ended before the signal"
+        seen = len(chunk_files(out)) if (out / "reason").exists() else 0
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+        assert proc.returncode == 130, (i, err[-2000:])
+        assert len(err.strip().splitlines()) == 1, (i, err[-2000:])
+        if not (out / "reason").exists():
+            continue
+        done = chunk_files(out)
+        assert seen <= len(done) <= seen + 2, (i, seen, len(done))
+        for f in done:
+            for name in ("capture_deg", "release_deg", "width_deg"):
+                assert (out / name / f.name).stat().st_size == 16 * 8
+        if done:
+            data = read_store(out)
+            assert np.isfinite(data["reason"]).all()

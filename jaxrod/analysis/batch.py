@@ -320,6 +320,8 @@ class FoldPairs(NamedTuple):
     bistable: (K,) status == BISTABLE; status: (K,) codes of ``STATUS``; tier: (K,) the
     tier that answered (1 the one-mode brackets, 2 wider brackets, 3 the batched
     continuation, 4 ``locate_folds``); iterations: (K,) Moore-Spence iterations of tier 1.
+
+    Paper: the two folds of Proposition ``thm:planar_fold`` of each parameter set.
     """
 
     alpha_deg: np.ndarray

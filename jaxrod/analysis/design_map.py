@@ -72,7 +72,7 @@ from jaxrod.analysis.fold_curves import (
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import UNITS, ParameterError
 from jaxrod.programs import jit
-from jaxrod.progress import progress_bar
+from jaxrod.progress import ctrl_c_guard, interrupt_requested, progress_bar
 
 #: The reason codes of a map's points: ``jaxrod.analysis.batch.STATUS`` (OK is BISTABLE).
 OK, REASONS = BISTABLE, STATUS
@@ -358,12 +358,15 @@ def run_map(spec: MapSpec, out: Path, progress: bool = True, devices=None) -> di
     bar = progress_bar(len(mine), "map", "chunk", progress, len(mine) - len(todo))
     c = spec.chunk
     try:
-        for iy, ix in todo:
-            block = values[iy * c:(iy + 1) * c, ix * c:(ix + 1) * c]
-            h, w = block.shape[:2]
-            res = solve_points(spec.point, block.reshape(h * w, -1), spec.n, devices)
-            _write_chunk(out, spec, iy, ix, {k: v.reshape(h, w) for k, v in res.items()})
-            bar.update(1)
+        with ctrl_c_guard():
+            for iy, ix in todo:
+                block = values[iy * c:(iy + 1) * c, ix * c:(ix + 1) * c]
+                h, w = block.shape[:2]
+                res = solve_points(spec.point, block.reshape(h * w, -1), spec.n, devices)
+                _write_chunk(out, spec, iy, ix, {k: v.reshape(h, w) for k, v in res.items()})
+                bar.update(1)
+                if interrupt_requested():  # a Ctrl-C that something swallowed
+                    raise KeyboardInterrupt
     finally:
         bar.close()
     return {"chunks": len(spec.chunks()), "this_process": len(mine),

@@ -24,8 +24,9 @@ is the Gauss-Newton step.
 
 The fold model tracks the folds: the folds at the starting modulus come from the one-mode
 brackets and Moore-Spence where they succeed, else from a continuation from the straight rod
-(``jaxrod.analysis.calibration.start_states``, the calibration's start), and every later evaluation solves each fold's Moore-Spence system from the folds of the last
-accepted point (``tracked_angles``; the folds move smoothly with E). Residuals, their
+(``jaxrod.analysis.calibration.start_states``, the calibration's start), and every later
+evaluation solves each fold's Moore-Spence system from the folds of the last accepted point
+(``tracked_angles``; the folds move smoothly with E). Residuals, their
 Jacobian and the gradient J^T r come from one forward-mode pass at one place in the loop
 (implicit differentiation of the Moore-Spence systems), and a trial point where a solve
 fails is rejected by the line search. The standard deviation of E follows from the
@@ -80,7 +81,9 @@ LOG_E_RANGE = (math.log(1e9), math.log(1e13))
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
 class FitSetup:
-    """G and M at the reference modulus E_ref (both scale as 1/E) and the track ratio D."""
+    """The experiment that ``fit_youngs_modulus`` models: G and M at the reference modulus
+    E_ref (both scale as 1/E) and the track ratio D (default: the paper's permanent-magnet
+    rig, ``setup_from_preset``). Paper: Corollary ``cor:permanent_physical_parameters``."""
 
     G_ref: float
     M_ref: float
