@@ -34,6 +34,11 @@ from jaxrod.params import (
 )
 from jaxrod.progress import ctrl_c_guard
 
+#: The default Chebyshev degree of ``map`` and ``design`` (their batched and least-squares
+#: programs: ``design_map.MAP_N``, ``calibration.MODEL_N``; the fold angles reach their
+#: round-off floor from N = 12 at the paper's parameters); other commands default to 16.
+BATCH_N = 12
+
 
 def _enable_compilation_cache() -> None:
     """Persist compiled programs between runs, and the traced programs of the main entry
@@ -411,7 +416,7 @@ def cmd_map(args) -> int:
     if not 4 <= args.chunk <= 1000:
         raise ParameterError(f"chunk must be in [4, 1000], got {args.chunk}")
     out = _output_dir(args.out)
-    spec = MapSpec(point, x, y, chunk=args.chunk)
+    spec = MapSpec(point, x, y, chunk=args.chunk, n=args.n)
     try:
         counts = run_map(spec, out, progress=not args.quiet)
     except KeyboardInterrupt:
@@ -932,7 +937,7 @@ def cmd_design(args) -> int:
         inputs = _with_n(inputs, args)
     allowed = point.names
     bounds = _pairs(args.bounds, "bounds", allowed)
-    result = design(point, args.capture, args.release, vary, bounds)
+    result = design(point, args.capture, args.release, vary, bounds, n=args.n)
     out = result.as_dict() | {"inputs": inputs}
     if args.json:
         print(json.dumps(out))
@@ -1102,7 +1107,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--track-radius", type=_float("track-radius", "track-radius"),
                        help="m (default 0.1125)")
 
-    def magnet_inputs(p):
+    def magnet_inputs(p, default_n: int = 16):
         p.add_argument("--G", type=_float("G", "G-magnet"), help="gravity group, in (0, 1e3]")
         p.add_argument("--M", type=_float("M", "M"), help="magnet group, in [0, 1e3]")
         p.add_argument("--D", type=_float("D", "D"), help="track radius / rod length, in "
@@ -1113,9 +1118,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="the paper's nickel wire and NdFeB magnet")
         physical_inputs(p)
         p.add_argument("--n", type=_degree("N-magnet"), default=None,
-                       help="Chebyshev degree, 4-64 (default 16)")
+                       help=f"Chebyshev degree, 4-64 (default {default_n})")
         p.add_argument("--json", action="store_true", help="print one JSON object")
-        p.set_defaults(n_fallback=16)
+        p.set_defaults(n_fallback=default_n)
 
     f = sub.add_parser("folds", help="fold (switching) angles of the permanent-magnet scene")
     magnet_inputs(f)
@@ -1196,7 +1201,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     de = sub.add_parser("design", help="inputs whose folds capture and release at target "
                         "angles (inverse design)")
-    magnet_inputs(de)
+    magnet_inputs(de, BATCH_N)
     de.add_argument("--capture", type=_float("capture", "angle"), required=True,
                     help="target capture angle (the lower fold), deg")
     de.add_argument("--release", type=_float("release", "angle"), required=True,
@@ -1224,7 +1229,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     mp = sub.add_parser("map", help="capture/release angles and hysteresis width on a grid "
                         "of two inputs (chunked Zarr store, resumable)")
-    magnet_inputs(mp)
+    magnet_inputs(mp, BATCH_N)
     mp.add_argument("--x", required=True, help="name:start:stop:count of the first input")
     mp.add_argument("--y", required=True, help="name:start:stop:count of the second input")
     mp.add_argument("--out", required=True, help="directory of the Zarr store and map.png")

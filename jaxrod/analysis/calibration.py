@@ -214,8 +214,8 @@ class Solution(NamedTuple):
     angles: jax.Array
 
 
-def _solve(kind: str, problem: Problem, max_iter: int = 60) -> Solution:
-    disc = planar_discretisation(MODEL_N, "clamped")
+def _solve(kind: str, problem: Problem, max_iter: int = 60, n: int = MODEL_N) -> Solution:
+    disc = planar_discretisation(n, "clamped")
     values, _ = values_of(problem, problem.p_start)
     scene, valid = _scene(kind, problem, values)
     z0, found = start_states(scene, disc)
@@ -228,7 +228,7 @@ def _solve(kind: str, problem: Problem, max_iter: int = 60) -> Solution:
 
 
 #: One program per kind of point ("groups", "physical"), kept between processes.
-solve_program = StoredProgram("calibration", _solve, static_argnames=("kind", "max_iter"))
+solve_program = StoredProgram("calibration", _solve, static_argnames=("kind", "max_iter", "n"))
 
 
 @jit(static_argnames=("kind", "max_iter"))

@@ -22,11 +22,11 @@ import math
 
 import numpy as np
 
-from jaxrod.analysis.calibration import OFFSET, parameter_names, solve_program
+from jaxrod.analysis.calibration import MODEL_N, OFFSET, parameter_names, solve_program
 from jaxrod.analysis.fit import _check_bounds, _check_names, _problem
 from jaxrod.analysis.fold_curves import DesignPoint, range_of
 from jaxrod.analysis.magnet import locate_folds, make_scene
-from jaxrod.params import UNITS, ParameterError, check_value
+from jaxrod.params import UNITS, ParameterError, check_degree, check_value
 
 #: A design hits its targets when the model's folds lie within this of them (degrees).
 HIT_DEG = 1e-6
@@ -70,6 +70,8 @@ class DesignResult:
     designs: list
     starts: int
     point: DesignPoint
+    n: int = 12
+    verify_n: int = 16
 
     def as_dict(self) -> dict:
         best = self.designs[0].as_dict() if self.designs else {}
@@ -80,6 +82,7 @@ class DesignResult:
                        "bounds": {k: list(v) for k, v in self.bounds.items()},
                        "solutions": [d.as_dict() for d in self.designs],
                        "starts": self.starts, "point": self.point.as_dict(),
+                       "n": self.n, "verify_n": self.verify_n,
                        "converged": bool(self.designs) and self.designs[0].verified}
 
 
@@ -132,18 +135,22 @@ def _starts(point: DesignPoint, vary, bounds, per_axis: int) -> list[np.ndarray]
 
 
 def design(point: DesignPoint, capture_deg: float, release_deg: float, vary,
-           bounds: dict | None = None, starts_per_axis: int = 3) -> DesignResult:
+           bounds: dict | None = None, starts_per_axis: int = 3,
+           n: int = MODEL_N) -> DesignResult:
     """Designs whose folds capture and release at the targets (module docstring).
 
     ``point``: the design to start from and the values of the inputs not varied (groups
     or physical); ``vary``: the inputs to solve for (names of ``point``); ``bounds``: name
-    -> (lo, hi) (default ``default_bounds``). Raises ParameterError when no bistable
-    design within the bounds reaches the targets (the closest found is in the message).
+    -> (lo, hi) (default ``default_bounds``); ``n``: the Chebyshev degree of the model's
+    folds (each design is verified by ``locate_folds`` at max(n, 16)). Raises ParameterError
+    when no bistable design within the bounds reaches the targets (the closest found is in
+    the message).
 
     Targets: the lower fold at ``capture_deg`` and the upper at ``release_deg`` (Proposition
     ``thm:planar_fold``; the design rule of section ``s.discussion`` of the paper).
     """
     capture, release = check_targets(capture_deg, release_deg)
+    degree = check_degree(n, "N-magnet")  # (``n`` names inputs below)
     vary = _check_names(vary, point.names, "vary")
     if not vary:
         raise ParameterError("vary: name at least one input to solve for")
@@ -173,7 +180,7 @@ def design(point: DesignPoint, capture_deg: float, release_deg: float, vary,
     names = parameter_names(point.kind)
     for p in starts:
         problem = _problem(point, measured, mask, 1.0, vary, {}, bounds, p)
-        sol = solve_program(point.kind, problem)
+        sol = solve_program(point.kind, problem, n=degree)
         model = np.asarray(sol.angles)
         miss = float(np.max(np.abs(model - measured)))
         values = point.values * np.exp(np.asarray(sol.result.p)[:-1])
@@ -186,22 +193,23 @@ def design(point: DesignPoint, capture_deg: float, release_deg: float, vary,
             found.append(candidate)
     if not found:
         raise ParameterError(_infeasible(capture, release, vary, bounds, closest))
-    designs = [_verified(point, c, capture, release) for c in found]
+    designs = [_verified(point, c, capture, release, max(degree, 16)) for c in found]
     designs.sort(key=lambda d: (not d.verified, _distance(point, d.values)))
-    return DesignResult(capture, release, vary, bounds, designs, len(starts), point)
+    return DesignResult(capture, release, vary, bounds, designs, len(starts), point, degree,
+                        max(degree, 16))
 
 
 def _distance(point: DesignPoint, values: dict) -> float:
     return sum(math.log(v / point.values[point.index(n)]) ** 2 for n, v in values.items())
 
 
-def _verified(point: DesignPoint, candidate, capture, release) -> Design:
+def _verified(point: DesignPoint, candidate, capture, release, degree: int) -> Design:
     values, model, _, converged, iterations = candidate
     at = point
     for n, v in values.items():
         at = at.replace(n, v)
     G, M, D = at.groups()
-    report = locate_folds(make_scene(G, M, D, at.radius()), n=16)
+    report = locate_folds(make_scene(G, M, D, at.radius()), n=degree)
     folds = [f.alpha_deg for f in report.folds] if len(report.folds) == 2 else None
     verified = (folds is not None and report.converged
                 and abs(folds[0] - capture) <= VERIFY_DEG
