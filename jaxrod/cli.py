@@ -409,14 +409,20 @@ def cmd_map(args) -> int:
 
     from jaxrod.analysis.design_map import MapAxis, MapSpec, read_store, run_map
 
-    point, inputs = _design_point_from_args(args)
     x, y = MapAxis.parse(args.x), MapAxis.parse(args.y)
+    axes = {}
+    for axis in (x, y):  # a group on an axis need not be given: the grid sets it
+        if axis.name in GROUP_NAMES and getattr(args, axis.name, None) is None \
+                and all(getattr(args, k) is None for k in _MAGNET_PHYSICAL):
+            setattr(args, axis.name, 0.5 * (axis.start + axis.stop))
+            axes[axis.name] = axis
+    point, inputs = _design_point_from_args(args)
+    for name, axis in axes.items():
+        inputs[name] = _entry(f"{axis.start:g} to {axis.stop:g}", "", "the map's axis")
     point.index(x.name)
     point.index(y.name)
-    if not 4 <= args.chunk <= 1000:
-        raise ParameterError(f"chunk must be in [4, 1000], got {args.chunk}")
-    out = _output_dir(args.out)
     spec = MapSpec(point, x, y, chunk=args.chunk, n=args.n)
+    out = _output_dir(args.out)
     try:
         counts = run_map(spec, out, progress=not args.quiet)
     except KeyboardInterrupt:

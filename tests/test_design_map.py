@@ -244,3 +244,32 @@ def test_ctrl_c_at_ten_moments_exits_130_and_keeps_the_finished_chunks(tmp_path)
         if done:
             data = read_store(out)
             assert np.isfinite(data["reason"]).all()
+
+
+@pytest.mark.parametrize("x, y, name", [
+    ("D:1.1:1.2:1", "M:0.02:0.03:1", "axis D: count"),
+    ("D:1.1:1.2:100000", "M:0.02:0.03:100000", "x, y: the grid has 100000 x 100000"),
+    ("D:1.1:1.2:4000", "M:0.02:0.03:4000", "x, y: the grid has 4000 x 4000"),
+])
+def test_map_refuses_grids_before_any_work(tmp_path, x, y, name):
+    """A 1 x 1 grid (which computed and then crashed in the figure) and grids whose counts
+    are each in range but whose product is not (100000 x 100000 ran numpy out of memory):
+    one line, exit 2, and no output folder."""
+    out = tmp_path / "never"
+    proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "map", "--G", "2.2", "--x", x,
+                           "--y", y, "--out", str(out), "--quiet"], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 2 and name in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_map_axes_need_not_be_given_as_inputs(tmp_path, capsys):
+    """--M and --D are the map's axes: the grid sets them (they were demanded)."""
+    from jaxrod.cli import main
+
+    out = tmp_path / "axes"
+    assert main(["map", "--G", "2.2", "--x", "D:1.15:1.25:2", "--y", "M:0.022:0.026:2",
+                 "--out", str(out), "--quiet", "--no-plot", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["inputs"]["D"]["source"] == "the map's axis"
+    assert summary["reason_counts"]["bistable"] == 4
