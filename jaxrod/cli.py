@@ -388,7 +388,7 @@ def cmd_foldcurve(args) -> int:
               f"no cusp between {args.vary} = {point.values[point.index(args.vary)]:.8g} and "
               f"{args.to:g}: bistable throughout")
         for e in curves.events:
-            print(f"a fold reaches {e.kind} at {args.vary} = {e.value:.10g}")
+            print(f"the {e.fold} fold reaches {e.kind} at {args.vary} = {e.value:.10g}")
         if out_dir is not None:
             print(f"wrote {out_dir / 'foldcurve.csv'}, foldcurve.json, foldcurve.png")
         print(f"converged: {curves.converged}")
@@ -407,7 +407,7 @@ def cmd_map(args) -> int:
                                    process_id=args.process_id)
     import numpy as np
 
-    from jaxrod.analysis.design_map import MapAxis, MapSpec, read_store, run_map
+    from jaxrod.analysis.design_map import STORE, MapAxis, MapSpec, read_store, run_map
 
     x, y = MapAxis.parse(args.x), MapAxis.parse(args.y)
     axes = {}
@@ -424,7 +424,7 @@ def cmd_map(args) -> int:
     spec = MapSpec(point, x, y, chunk=args.chunk, n=args.n)
     out = _output_dir(args.out)
     try:
-        counts = run_map(spec, out, progress=not args.quiet)
+        counts = run_map(spec, out / STORE, progress=not args.quiet)
     except KeyboardInterrupt:
         print(f"jaxrod map: interrupted; the finished chunks are kept in {out} (run the same "
               "command again to resume)", file=sys.stderr)
@@ -1238,7 +1238,8 @@ def build_parser() -> argparse.ArgumentParser:
     magnet_inputs(mp, BATCH_N)
     mp.add_argument("--x", required=True, help="name:start:stop:count of the first input")
     mp.add_argument("--y", required=True, help="name:start:stop:count of the second input")
-    mp.add_argument("--out", required=True, help="directory of the Zarr store and map.png")
+    mp.add_argument("--out", required=True, help="directory for the Zarr store map.zarr and, "
+                    "beside it, map.png and map.json")
     mp.add_argument("--chunk", type=int, default=50, help="chunk edge in grid points")
     mp.add_argument("--quiet", action="store_true", help="no progress bar")
     mp.add_argument("--no-plot", action="store_true", help="skip map.png and the cusp curve")

@@ -216,23 +216,51 @@ def conditioning_figure(studies: dict):
     return fig
 
 
+def bistable_band(curves, points: int = 400):
+    """(x, lower, upper, bistable) on a common grid of the varied input: both fold curves
+    interpolated where both exist, and where the rod is bistable in the magnet's sweep (both
+    folds in (0, 90] degrees, lower below upper)."""
+    by_start = {c.start: c for c in curves.curves}
+    lo, up = by_start["lower"], by_start["upper"]
+    start = max(lo.value.min(), up.value.min())
+    stop = min(lo.value.max(), up.value.max())
+    if not start < stop:
+        x = np.zeros(0)
+        return x, x, x, np.zeros(0, bool)
+    x = np.linspace(start, stop, points)
+    on = lambda c: np.interp(x, *(a[np.argsort(c.value)] for a in (c.value, c.alpha_deg)))
+    a_lo, a_up = on(lo), on(up)
+    bistable = (a_lo > 0.0) & (a_up <= 90.0) & (a_up > a_lo)
+    return x, a_lo, a_up, bistable
+
+
 def fold_curve_figure(curves):
-    """Magnet angle of both folds against the varied input (``FoldCurves``): the bistable
-    band between them shaded, the cusp marked, alpha = 90 degrees dotted."""
+    """Magnet angle of both folds against the varied input (``FoldCurves``): shaded where
+    the rod is bistable in the magnet's sweep (both folds in (0, 90] degrees), the points where
+    a fold leaves (0, 90] marked and named, alpha = 90 degrees dotted, and the cusp, called
+    the end of the bistability only where it is (both curves meet there, within 90 degrees)."""
     fig, ax = plt.subplots(figsize=(7.5, 5))
     by_start = {c.start: c for c in curves.curves}
     for start, colour in (("lower", "C0"), ("upper", "C3")):
         c = by_start[start]
         label = {"lower": "lower fold (capture)", "upper": "upper fold (release)"}[start]
         ax.plot(c.value, c.alpha_deg, "-", color=colour, lw=2, label=label)
-    band_x = np.concatenate([by_start["lower"].value, by_start["upper"].value[::-1]])
-    band_y = np.concatenate([by_start["lower"].alpha_deg, by_start["upper"].alpha_deg[::-1]])
-    ax.fill(band_x, band_y, color="0.85", zorder=0, label="bistable (hysteresis)")
+    x, a_lo, a_up, bistable = bistable_band(curves)
+    if bistable.any():
+        ax.fill_between(x, a_lo, a_up, where=bistable, color="0.85", zorder=0,
+                        label="bistable: both folds in (0, 90] deg")
     if curves.cusp is not None:
-        ax.plot(curves.cusp.value, curves.cusp.alpha_deg, "k*", ms=13,
-                label=f"cusp: {curves.vary} = {curves.cusp.value:.8g}")
+        c = curves.cusp
+        ends = all(k.reaches_cusp for k in curves.curves) and 0.0 < c.alpha_deg <= 90.0
+        label = (f"cusp: bistability ends at {curves.vary} = {c.value:.8g}" if ends else
+                 f"cusp of a fold curve at {c.alpha_deg:.4g} deg ({curves.vary} = "
+                 f"{c.value:.6g}): " + ("beyond 90 deg, outside the sweep" if c.alpha_deg > 90
+                                        else "not where both folds meet"))
+        ax.plot(c.value, c.alpha_deg, "k*" if ends else "k1", ms=13, label=label)
     for e in curves.events:
-        ax.plot(e.value, e.alpha_deg, "kx", ms=9)
+        ax.plot(e.value, e.alpha_deg, "kx", ms=9,
+                label=f"{e.fold} fold reaches {e.kind[len('alpha = '):]} at "
+                      f"{curves.vary} = {e.value:.6g}")
     if max(np.max(c.alpha_deg) for c in curves.curves) > 80.0:
         ax.axhline(90.0, color="0.5", lw=0.8, ls=":")
     from jaxrod.params import UNITS
@@ -249,31 +277,59 @@ def fold_curve_figure(curves):
 
 
 def design_map_figure(data: dict, spec, cusps=(), crossings=()):
-    """Hysteresis width over the map's two inputs (filled contours), capture and release
-    angles as contour lines, the cusp curve (where the bistability ends), the grid points
+    """Hysteresis width over the map's two inputs (a cell per grid point), capture and release
+    angles as contour lines, the points that are not bistable in grey, those not computed or
+    not converged hatched, the cusp curve (where the bistability ends), the grid points
     where a fold lies beyond 90 degrees and, from the fold curves, where the upper fold
-    reaches 90 degrees (``crossings``); the fixed inputs in the title."""
+    reaches 90 degrees (``crossings``); the axes span the grid exactly; the fixed inputs in
+    the title."""
+    from matplotlib.patches import Patch
+
     from jaxrod.params import UNITS
 
     fig, ax = plt.subplots(figsize=(8, 5.6))
     X, Y = np.meshgrid(data["x"], data["y"])
-    width = np.where(data["reason"] == 0, data["width_deg"], np.nan)
+    reason = data["reason"]
+    width = np.where(reason == 0, data["width_deg"], np.nan)
+    handles = []
     if np.isfinite(width).any():
-        filled = ax.contourf(X, Y, width, levels=12, cmap="viridis")
+        # one cell per grid point (no interpolation between points of different kinds)
+        from matplotlib.colors import BoundaryNorm
+        from matplotlib.ticker import MaxNLocator
+
+        levels = MaxNLocator(12).tick_values(np.nanmin(width), np.nanmax(width))
+        filled = ax.pcolormesh(X, Y, width, shading="nearest", cmap="viridis",
+                               norm=BoundaryNorm(levels, 256))
         fig.colorbar(filled, ax=ax, label="hysteresis width (deg)")
         for name, colour in (("capture_deg", "w"), ("release_deg", "0.2")):
-            field = np.where(data["reason"] == 0, data[name], np.nan)
-            lines = ax.contour(X, Y, field, levels=6, colors=colour, linewidths=0.7)
-            ax.clabel(lines, fontsize=6, fmt="%.0f")
-    beyond = data["reason"] == 2
-    if beyond.any():
-        ax.plot(X[beyond], Y[beyond], "r.", ms=2, label="a fold beyond 90 deg")
+            field = np.where(reason == 0, data[name], np.nan)
+            if np.isfinite(field).sum() >= 4:
+                lines = ax.contour(X, Y, field, levels=6, colors=colour, linewidths=0.7)
+                ax.clabel(lines, fontsize=6, fmt="%.0f")
+    # every point is drawn as what it is: cells of the grid (pcolormesh) for the non-bistable
+    # and the unknown, so that none of them looks like another
+    for mask, style, label in (
+            (reason == 1, {"color": "0.8"}, "not bistable"),
+            (reason == 2, {"color": "#f2b8b5"}, "a fold beyond 90 deg (outside the sweep)"),
+            (reason == 3, {"color": "0.55"}, "invalid input (the magnet would touch the rod)"),
+            ((reason == -1) | (reason == 4), {"color": "none", "hatch": "xx", "ec": "0.4"},
+             "not computed, or no solver converged")):
+        if mask.any():
+            ax.pcolormesh(X, Y, np.where(mask, 1.0, np.nan), shading="nearest",
+                          cmap=_single(style.get("color", "none")), zorder=1)
+            if "hatch" in style:
+                ax.contourf(X, Y, mask.astype(float), levels=[0.5, 1.5], colors="none",
+                            hatches=["xx"], zorder=2)
+            handles.append(Patch(facecolor=style["color"], hatch=style.get("hatch"),
+                                 edgecolor=style.get("ec", "0.8"), label=label))
     if cusps:
         ax.plot([c[spec.x.name] for c in cusps], [c[spec.y.name] for c in cusps], "k*-",
                 ms=8, label="cusp (bistability ends)")
     if crossings:
         ax.plot([c[spec.x.name] for c in crossings], [c[spec.y.name] for c in crossings],
                 "r^", ms=6, mec="k", label="fold curves: upper fold reaches 90 deg")
+    ax.set_xlim(data["x"].min(), data["x"].max())
+    ax.set_ylim(data["y"].min(), data["y"].max())
     unit = lambda n: f" ({UNITS[n]})" if UNITS[n] else ""
     ax.set_xlabel(spec.x.name + unit(spec.x.name))
     ax.set_ylabel(spec.y.name + unit(spec.y.name))
@@ -282,10 +338,18 @@ def design_map_figure(data: dict, spec, cusps=(), crossings=()):
         if name not in (spec.x.name, spec.y.name))
     ax.set_title("bistable region: width filled; capture (white) and release (dark) angles\n"
                  + "\n".join(textwrap.wrap(f"{fixed}, N = {spec.n}", 95)), fontsize=9)
-    if beyond.any() or cusps or crossings:
-        ax.legend(fontsize=8, loc="upper right")
+    lines, labels = ax.get_legend_handles_labels()
+    if lines or handles:
+        ax.legend(handles=lines + handles, fontsize=8, loc="upper right")
     fig.tight_layout()
     return fig
+
+
+def _single(colour: str):
+    """A colour map of one colour (``colour``, or transparent for "none")."""
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap([(0, 0, 0, 0) if colour == "none" else colour])
 
 
 def profile_figure(profiles: list, calibration=None):

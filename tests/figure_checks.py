@@ -42,10 +42,11 @@ def absent_legend_entries(fig) -> list[str]:
             elif isinstance(handle, Patch | Collection):
                 face = mcolors.to_rgba(handle.get_facecolor() if isinstance(handle, Patch)
                                        else handle.get_facecolor()[0])
-                ok = any(np.allclose(mcolors.to_rgba(
-                    f.get_facecolor() if isinstance(f, Patch) else f.get_facecolor()[0]),
-                    face) for f in filled if not isinstance(f, Collection)
-                    or len(f.get_facecolor()))
+                # a collection's faces: each of its colours (a colour-mapped mesh has one
+                # per cell)
+                faces = [np.atleast_2d(mcolors.to_rgba_array(f.get_facecolor()))
+                         for f in filled]
+                ok = any(np.allclose(row, face) for rows in faces for row in rows)
             else:
                 ok = True
             if not ok:

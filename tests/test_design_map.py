@@ -98,15 +98,40 @@ def test_store_opens_and_matches_solve_points(reference):
     assert reference["width_deg"].shape == (7, 9)
 
 
-def test_store_is_zarr_that_xarray_opens(reference, tmp_path):
+def test_store_is_zarr_that_xarray_opens_without_warnings(reference, tmp_path, capsys):
+    """The command line's store, opened as the docs say: no warning (consolidated metadata;
+    map.png and map.json beside the store, not in it), coordinates named by the inputs, a
+    chunk not written yet is missing (NaN to xarray, -1 "not computed" to ``read_store``), and
+    the code 4 ("not converged") stays 4 (it was the fill value, which xarray turned into
+    NaN)."""
+    import warnings
+
     xr = pytest.importorskip("xarray")
     pytest.importorskip("zarr")
+    from jaxrod.cli import main
+
     out = tmp_path / "z"
-    spec = MapSpec(_point(), MapAxis.parse(BISTABLE_X), MapAxis.parse(BISTABLE_Y), chunk=4)
-    run_map(spec, out, progress=False)
-    ds = xr.open_zarr(out, consolidated=False)
+    assert main([*CLI[3:], "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert (out / "map.json").exists() and not (out / "map.zarr" / "map.json").exists()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ds = xr.open_zarr(out / "map.zarr")
+    assert set(ds.coords) == {"track-radius", "E"} and ds["width_deg"].dims == (
+        "E", "track-radius")
     np.testing.assert_array_equal(ds["width_deg"].values, reference["width_deg"])
     assert ds["capture_deg"].attrs["units"] == "degree" and "source" in ds.attrs
+    assert ds["E"].attrs["units"] == "Pa"
+    # a point that no solver converged, and a chunk not written
+    (out / "map.zarr" / "reason" / "0.0").write_bytes(np.full((4, 4), 4, np.int8).tobytes())
+    (out / "map.zarr" / "reason" / "1.1").unlink()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        reason = xr.open_zarr(out / "map.zarr")["reason"].values
+    assert (reason[:4, :4] == 4).all() and np.isnan(reason[4:, 4:8]).all()
+    mine = read_store(out)["reason"]
+    assert (mine[4:, 4:8] == -1).all() and (mine[:4, :4] == 4).all()
+    assert np.count_nonzero(np.isnan(reason)) == np.count_nonzero(mine == -1)
 
 
 def test_a_map_for_other_arguments_is_refused(tmp_path):
@@ -128,7 +153,7 @@ def test_resume_after_kill_loses_nothing(reference, tmp_path):
     out = tmp_path / "killed"
     proc = subprocess.Popen([*CLI, "--out", str(out)], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE)
-    chunks = lambda: [f for f in (out / "reason").glob("*") if f.name[0].isdigit()]
+    chunks = lambda: [f for f in (out / "map.zarr" / "reason").glob("*") if f.name[0].isdigit()]
     deadline = time.monotonic() + 600
     while time.monotonic() < deadline and proc.poll() is None:
         if len(chunks()) >= 2:  # two of six chunks written
@@ -216,7 +241,8 @@ def test_ctrl_c_at_ten_moments_exits_130_and_keeps_the_finished_chunks(tmp_path)
     compilation, and after 1 to 60 finished chunks): exit 130 every time, with one line
     on stderr, soon (no run goes on to the end: a Ctrl-C swallowed in a garbage-collection
     callback did that), and every chunk marked complete readable with its four variables."""
-    chunk_files = lambda out: [f for f in (out / "reason").glob("*") if f.name[0].isdigit()]
+    chunk_files = lambda out: [f for f in (out / "map.zarr" / "reason").glob("*")
+                               if f.name[0].isdigit()]
     for i, (delay, after) in enumerate([(1.0, 0), (4.0, 0), (0, 1), (0, 2), (0, 3), (0, 6),
                                         (0, 10), (0, 20), (0, 35), (0, 60)]):
         out = tmp_path / f"map{i}"
@@ -225,25 +251,25 @@ def test_ctrl_c_at_ten_moments_exits_130_and_keeps_the_finished_chunks(tmp_path)
         time.sleep(delay)
         deadline = time.monotonic() + 300
         while after and time.monotonic() < deadline and proc.poll() is None:
-            if (out / "reason").exists() and len(chunk_files(out)) >= after:
+            if (out / "map.zarr" / "reason").exists() and len(chunk_files(out)) >= after:
                 break
             time.sleep(0.01)
         assert proc.poll() is None, f"moment {i}: the map ended before the signal"
-        seen = len(chunk_files(out)) if (out / "reason").exists() else 0
+        seen = len(chunk_files(out)) if (out / "map.zarr" / "reason").exists() else 0
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=120)
         assert proc.returncode == 130, (i, err[-2000:])
         assert len(err.strip().splitlines()) == 1, (i, err[-2000:])
-        if not (out / "reason").exists():
+        if not (out / "map.zarr" / "reason").exists():
             continue
         done = chunk_files(out)
         assert seen <= len(done) <= seen + 2, (i, seen, len(done))
         for f in done:
             for name in ("capture_deg", "release_deg", "width_deg"):
-                assert (out / name / f.name).stat().st_size == 16 * 8
+                assert (out / "map.zarr" / name / f.name).stat().st_size == 16 * 8
         if done:
             data = read_store(out)
-            assert np.isfinite(data["reason"]).all()
+            assert ((data["reason"] >= -1) & (data["reason"] <= 4)).all()
 
 
 @pytest.mark.parametrize("x, y, name", [

@@ -101,3 +101,51 @@ def test_conditioning_figure(tmp_path):
               for k, key in enumerate(CONDITIONING_LABELS)}
     check_figure(jr.conditioning_figure({"upper fold": study, "lower fold": study}), tmp_path,
                  "conditioning")
+
+
+def test_fold_curve_figure_shades_only_the_sweeps_bistability(tmp_path):
+    """G = 4.4, M = 0.0472 towards D = 1.01: the upper fold passes 90 degrees at D = 1.076
+    and ends at a cusp at 103.6 degrees that the lower fold never meets. The shading (bistable
+    in the sweep) stays within (0, 90] degrees and starts where the upper fold leaves it; the
+    90-degree exit is named with its fold; the cusp is not called the end of the
+    bistability. (The last release shaded up to 103.6 degrees and labelled that "cusp".)"""
+    point = jr.DesignPoint.from_groups(4.4, 0.0472, 1.2228)
+    curves = jr.fold_curves(point, "D", 1.01, n=12)
+    exit_90 = [e for e in curves.events if e.kind == "alpha = 90 deg"]
+    assert len(exit_90) == 1 and exit_90[0].fold == "upper"
+    fig = jr.fold_curve_figure(curves)
+    ax = fig.axes[0]
+    shaded = [c for c in ax.collections if len(c.get_paths())]
+    ys = np.concatenate([p.vertices[:, 1] for c in shaded for p in c.get_paths()])
+    xs = np.concatenate([p.vertices[:, 0] for c in shaded for p in c.get_paths()])
+    assert ys.max() <= 90.0 + 1e-9 and ys.min() > 0.0
+    assert xs.min() >= exit_90[0].value - 1e-3
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("upper fold reaches 90 deg" in t for t in labels)
+    assert not any("bistability ends" in t for t in labels)
+    check_figure(fig, tmp_path, "foldcurve_beyond_90")
+
+
+def test_design_map_figure_spans_the_grid_and_draws_every_kind_of_point(tmp_path):
+    """Not bistable, invalid, beyond 90 degrees, not computed: each drawn and named (the last
+    release drew the uncomputed strip white, like "not bistable"), and the axes end at the
+    grid even where a cusp lies outside it."""
+    point = jr.DesignPoint.from_groups(*PAPER)
+    spec = jr.MapSpec(point, jr.MapAxis.parse("D:1.15:1.45:6"),
+                      jr.MapAxis.parse("M:0.015:0.03:5"), chunk=6)
+    x, y = spec.x.values(), spec.y.values()
+    reason = np.zeros((5, 6), np.int8)
+    reason[:, 4:] = 1
+    reason[0, 0], reason[1, 0], reason[4, :2] = 3, 2, -1
+    width = np.where(reason == 0, 10.0 + np.arange(30).reshape(5, 6), np.nan)
+    data = {"x": x, "y": y, "reason": reason, "width_deg": width,
+            "capture_deg": width + 20.0, "release_deg": 2 * width + 20.0}
+    cusps = [{"D": 1.6, "M": 0.02}]  # outside the grid
+    fig = jr.design_map_figure(data, spec, cusps)
+    ax = fig.axes[0]
+    assert ax.get_xlim() == (x.min(), x.max()) and ax.get_ylim() == (y.min(), y.max())
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    for text in ("not bistable", "invalid input", "a fold beyond 90 deg", "not computed"):
+        assert any(text in t for t in labels), (text, labels)
+    assert any(h.get_hatch() for h in ax.get_legend().legend_handles if hasattr(h, "get_hatch"))
+    check_figure(fig, tmp_path, "map_kinds")

@@ -26,7 +26,9 @@ The grid is written chunk by chunk as a Zarr (version 2) store, written with num
 (raw little-endian chunks, no compressor), which xarray opens with ``xarray.open_zarr``
 (``pip install 'jaxrod[maps]'``): variables ``capture_deg`` (the lower fold: the magnet
 angle where the disengaged rod is captured), ``release_deg`` (the upper fold),
-``width_deg`` and ``reason`` on dimensions (y, x), with units and provenance attributes. A
+``width_deg`` and ``reason`` on dimensions named by the two inputs (y first), coordinates
+with units, provenance attributes and consolidated metadata (``.zmetadata``); ``reason`` is
+-1 (``NOT_COMPUTED``, outside the codes) where a chunk was not written yet. A
 chunk is complete when its ``reason`` file exists (written last, atomically): a killed run
 started again with the same arguments skips the complete chunks and loses nothing.
 
@@ -210,12 +212,15 @@ def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
 # --- the on-disk store (Zarr version 2, written with numpy) ----------------------------------
 
 _DTYPES = {"capture_deg": "<f8", "release_deg": "<f8", "width_deg": "<f8", "reason": "|i1"}
-_FILL = {"<f8": "NaN", "|i1": NOT_CONVERGED}
+#: ``reason`` of a point not computed yet (a chunk not written): outside the codes of
+#: ``REASONS``, so that no reader takes a code for a missing value or the reverse.
+NOT_COMPUTED = -1
+_FILL = {"<f8": "NaN", "|i1": NOT_COMPUTED}
 LONG_NAMES = {"capture_deg": "magnet angle of the lower fold (capture of the disengaged rod)",
               "release_deg": "magnet angle of the upper fold (release of the engaged rod)",
               "width_deg": "hysteresis width, release - capture",
               "reason": "0 bistable; 1 not bistable; 2 a fold beyond 90 deg; 3 invalid "
-              "input; 4 not converged"}
+              "input; 4 not converged; -1 not computed (missing chunk)"}
 
 
 def _write_atomic(path: Path, data: bytes) -> None:
@@ -296,24 +301,32 @@ def _init_store(out: Path, spec: MapSpec) -> None:
         _json(root, {
             "title": f"jaxrod bistability map over {spec.x.name} and {spec.y.name}",
             "source": f"jaxrod {version} (jax {jax.__version__}), N = {spec.n} Chebyshev",
-            "fixed_inputs": json.dumps(fixed), "reason_codes": json.dumps(REASONS),
+            "fixed_inputs": json.dumps(fixed), "reason_codes": json.dumps(
+                {str(k): v for k, v in (REASONS | {NOT_COMPUTED: "not computed"}).items()}),
             "history": "created " + created, "jaxrod_map": description})
     shape = (spec.y.count, spec.x.count)
+    dims = [spec.y.name, spec.x.name]
+    meta = {".zgroup": {"zarr_format": 2}, ".zattrs": json.loads(root.read_text())}
     for name in VARIABLES:
-        (out / name).mkdir(exist_ok=True)
         dtype = _DTYPES[name]
-        _json(out / name / ".zarray", _array_meta(shape, (spec.chunk, spec.chunk), dtype,
-                                                  _FILL[dtype]))
-        _json(out / name / ".zattrs", {"_ARRAY_DIMENSIONS": ["y", "x"],
-                                       "units": "1" if name == "reason" else "degree",
-                                       "long_name": LONG_NAMES[name]})
-    for dim, axis in (("x", spec.x), ("y", spec.y)):
-        (out / dim).mkdir(exist_ok=True)
-        _json(out / dim / ".zarray", _array_meta((axis.count,), (axis.count,), "<f8", "NaN"))
-        _json(out / dim / ".zattrs", {"_ARRAY_DIMENSIONS": [dim],
-                                      "units": UNITS[axis.name] or "1",
-                                      "long_name": axis.name})
-        _write_atomic(out / dim / "0", axis.values().astype("<f8").tobytes())
+        meta[f"{name}/.zarray"] = _array_meta(shape, (spec.chunk, spec.chunk), dtype,
+                                              _FILL[dtype])
+        meta[f"{name}/.zattrs"] = {"_ARRAY_DIMENSIONS": dims,
+                                   "units": "1" if name == "reason" else "degree",
+                                   "long_name": LONG_NAMES[name]}
+    for axis in (spec.x, spec.y):
+        meta[f"{axis.name}/.zarray"] = _array_meta((axis.count,), (axis.count,), "<f8", "NaN")
+        meta[f"{axis.name}/.zattrs"] = {"_ARRAY_DIMENSIONS": [axis.name],
+                                        "units": UNITS[axis.name] or "1",
+                                        "long_name": axis.name}
+    for key, value in meta.items():
+        if "/" in key:
+            (out / key).parent.mkdir(exist_ok=True)
+            _json(out / key, value)
+    for axis in (spec.x, spec.y):
+        _write_atomic(out / axis.name / "0", axis.values().astype("<f8").tobytes())
+    # consolidated metadata (``.zmetadata``): readers open the store with one read
+    _json(out / ".zmetadata", {"zarr_consolidated_format": 1, "metadata": meta})
 
 
 def _chunk_done(out: Path, key: str) -> bool:
@@ -325,18 +338,32 @@ def _write_chunk(out: Path, spec: MapSpec, iy: int, ix: int, result: dict) -> No
     key = f"{iy}.{ix}"
     for name in VARIABLES:  # reason last: it marks the chunk complete
         dtype = np.dtype(_DTYPES[name])
-        fill = NOT_CONVERGED if name == "reason" else np.nan
-        block = np.full((c, c), fill, dtype)
+        block = np.full((c, c), NOT_COMPUTED if name == "reason" else np.nan, dtype)
         part = result[name]
         block[:part.shape[0], :part.shape[1]] = part
         _write_atomic(out / name / key, block.tobytes())
 
 
-def read_store(out: Path) -> dict[str, np.ndarray]:
-    """The map's variables and axes from a store written here (numpy only)."""
+STORE = "map.zarr"
+
+
+def store_path(out: Path) -> Path:
+    """The Zarr store of a map written to the folder ``out`` by the command line
+    (``out/map.zarr``, beside map.png and map.json), or ``out`` itself when it is a store."""
     out = Path(out)
+    return out / STORE if (out / STORE / ".zgroup").exists() else out
+
+
+def read_store(out: Path) -> dict[str, np.ndarray]:
+    """The map's variables and axes from a store written here (numpy only): the variables
+    of ``VARIABLES`` (``reason`` NOT_COMPUTED where a chunk was not written), the axes by
+    their inputs' names and as ``x`` and ``y``. ``out``: the store, or the folder that holds
+    it (``store_path``)."""
+    out = store_path(out)
+    spec = json.loads(json.loads((out / ".zattrs").read_text())["jaxrod_map"])
+    x, y = spec["x"]["name"], spec["y"]["name"]
     data = {}
-    for name in ("x", "y", *VARIABLES):
+    for name in (x, y, *VARIABLES):
         meta = json.loads((out / name / ".zarray").read_text())
         shape, chunks, dtype = meta["shape"], meta["chunks"], np.dtype(meta["dtype"])
         fill = np.nan if meta["fill_value"] == "NaN" else meta["fill_value"]
@@ -354,6 +381,7 @@ def read_store(out: Path) -> dict[str, np.ndarray]:
                     h, w = min(chunks[0], shape[0] - ys), min(chunks[1], shape[1] - xs)
                     arr[ys:ys + h, xs:xs + w] = block[:h, :w]
         data[name] = arr
+    data["x"], data["y"] = data[x], data[y]
     return data
 
 

@@ -226,9 +226,11 @@ class CurvePoint:
     residual_norm: float
     iterations: int
     state: np.ndarray  # (theta, phi, alpha, u), u relative to the starting point's value
+    fold: str = ""  # the fold curve it lies on ("lower" or "upper"; "" for a cusp)
 
     def as_dict(self) -> dict:
-        return {self.vary: self.value, "alpha_deg": self.alpha_deg, "q": self.q,
+        return {self.vary: self.value, "fold": self.fold, "alpha_deg": self.alpha_deg,
+                "q": self.q,
                 "tip_deg": self.tip_deg, "dF_dalpha": self.dF_dalpha, "d2F_dq2": self.d2F_dq2,
                 "cubic_coefficient": self.cubic_coefficient,
                 "hessian_smallest_eigenvalues": list(self.hessian_smallest),
@@ -446,8 +448,8 @@ def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) ->
         if near is not None and cusp is None:
             cusp = _refine("cusp", runs.w[i_run][near], 0.0, disc, vary_map, base, vary, v0,
                            "cusp")
-        events += _alpha_events(runs, observed, i_run, disc, vary_map, base, vary, v0,
-                                len(curve.value))
+        events += [dataclasses.replace(e, fold=start) for e in _alpha_events(
+            runs, observed, i_run, disc, vary_map, base, vary, v0, len(curve.value))]
         if curve.reaches_cusp:
             curve = _with_end(curve, cusp)
         elif abs(curve.value[-1] - v0) > abs(to - v0):  # passed `to`: end exactly there

@@ -68,8 +68,9 @@ from jaxrod.solvers.newton import implicit_newton, newton
 
 CUSP_PASSED = 5
 CURVE_STATUS = STATUS_MESSAGES | {
-    CUSP_PASSED: "passed max_cusps cusps",
-    REACHED_BOUND: "reached a bound of the parameter or of lam"}
+    CUSP_PASSED: "ended at a cusp (the fold curve turns back there)",
+    REACHED_BOUND: "reached the end of the range (of the varied input, or of the magnet "
+    "angle)"}
 
 #: ``args_at(u, args) -> model args``: how the second parameter enters the energy (a
 #: hashable, module-level function or frozen dataclass, so compiled programs are reused).
