@@ -830,7 +830,12 @@ def cmd_fit(args) -> int:
             free += (OFFSET,)
     else:
         free = ("E", OFFSET) if args.offset else ("E",)
-    priors = {k: Prior(*v) for k, v in _pairs(args.prior, "prior", FREE_NAMES).items()}
+    priors = {}
+    for k, v in _pairs(args.prior, "prior", FREE_NAMES).items():
+        try:
+            priors[k] = Prior(*v)
+        except ParameterError as err:
+            raise ParameterError(f"prior {k}: {err}") from None
     bounds = _pairs(args.bounds, "bounds", FREE_NAMES)
     out_dir = _output_dir(args.out) if args.out else None
     if args.profile and out_dir is None:
@@ -885,6 +890,9 @@ def _print_calibration(cal, angle_names) -> None:
         print(f"NOT CONVERGED after {cal.iterations} iterations: {cal.reason}")
         print("last iterate (not an estimate): " + ", ".join(
             f"{n} = {v:.6g} {cal.units[n]}" for n, v in cal.estimates.items()))
+        for w in cal.warnings:
+            if "signs" in w:
+                print(f"hint: {w}")
         return
     priors = ", ".join(f"{n} = {p.mean:.6g} +- {p.sd:.3g} {cal.units.get(n, '')}"
                        for n, p in cal.priors.items())
@@ -924,7 +932,20 @@ def cmd_design(args) -> int:
     from jaxrod.analysis.design import design
 
     vary = _names(args.vary, "vary")
-    groups = any(getattr(args, k) is not None for k in ("G", "M", "D", "magnet_radius"))
+    groups = any(getattr(args, k) is not None for k in ("G", "M", "D", "magnet_radius")) or (
+        all(k in GROUP_NAMES for k in vary)
+        and all(getattr(args, k) is None for k in _MAGNET_PHYSICAL))
+    allowed = GROUP_NAMES if groups else PHYSICAL_NAMES
+    for name in vary:
+        if name not in allowed:
+            other = PHYSICAL_NAMES if groups else GROUP_NAMES
+            hint = (f"{name} is a {'physical input' if groups else 'group'}: with "
+                    + ("--G/--M/--D vary groups" if groups else "physical inputs vary "
+                       "physical inputs") + f" ({', '.join(allowed)})" if name in other else
+                    f"unknown input {name!r}; choose from {', '.join(allowed)}")
+            raise ParameterError(f"vary: {hint}")
+    if len(set(vary)) != len(vary):
+        raise ParameterError(f"vary: an input is named twice in {args.vary!r}")
     if groups:
         filled = {}
         for k in GROUP_NAMES:
@@ -953,6 +974,10 @@ def cmd_design(args) -> int:
               f"; varying {', '.join(vary)} within " + ", ".join(
                   f"[{lo:.6g}, {hi:.6g}]" for lo, hi in result.bounds.values())
               + f" ({result.starts} starts)")
+        if result.family:
+            print(f"{len(vary)} inputs for 2 targets: the designs form a {result.family}-"
+                  f"parameter family; below are {len(result.designs)} of them (vary two "
+                  "inputs, or fix the others, for isolated designs)")
         for i, d in enumerate(result.designs):
             values = ", ".join(f"{n} = {v:.10g} {UNITS[n]}".rstrip() for n, v in d.values.items())
             check = (f"locate_folds: {d.verified_capture_deg:.10f} / "

@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxrod.analysis.batch import fold_pair_states
 from jaxrod.analysis.fold_curves import groups_of
@@ -50,6 +51,21 @@ from jaxrod.stored import StoredProgram
 ANGLE_NAMES = ("cw_capture", "cw_release", "ccw_capture", "ccw_release")
 SIGNS = jnp.array([-1.0, 1.0, 1.0, -1.0])  # fold angle sign per measured angle
 FOLD = jnp.array([0, 1, 0, 1])  # lower / upper fold per measured angle
+
+def sign_hint(measured, mask) -> str | None:
+    """A hint when the measured angles' signs are the opposite of the convention (every
+    measured angle beyond 2 degrees with the other sign): the clockwise sweep captures at
+    -alpha_lower and releases at +alpha_upper, the counter-clockwise sweep the reverse
+    (magnet angles positive towards e1)."""
+    m = np.asarray(measured, float)[np.asarray(mask, bool)]
+    expected = np.asarray(SIGNS)[np.asarray(mask, bool)]
+    big = np.abs(m) > 2.0
+    if big.sum() >= 2 and np.all(np.sign(m[big]) == -expected[big]):
+        return ("the angles' signs are the opposite of the convention: in the order "
+                f"{', '.join(ANGLE_NAMES)} they are -, +, +, - (capture at -alpha_lower in "
+                "the clockwise sweep, magnet angles positive towards e1): change the signs")
+    return None
+
 
 #: Moore-Spence discretisation of the model (the fold angles reach round-off by N = 12).
 MODEL_N = 12

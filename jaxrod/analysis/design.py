@@ -73,6 +73,12 @@ class DesignResult:
     n: int = 12
     verify_n: int = 16
 
+    @property
+    def family(self) -> int:
+        """How many dimensions the designs span: the varied inputs beyond the two targets
+        (0: isolated designs; more: a family, of which ``designs`` are samples)."""
+        return max(len(self.vary) - 2, 0)
+
     def as_dict(self) -> dict:
         best = self.designs[0].as_dict() if self.designs else {}
         return best | {"targets": {"capture_deg": self.capture_deg,
@@ -82,7 +88,7 @@ class DesignResult:
                        "bounds": {k: list(v) for k, v in self.bounds.items()},
                        "solutions": [d.as_dict() for d in self.designs],
                        "starts": self.starts, "point": self.point.as_dict(),
-                       "n": self.n, "verify_n": self.verify_n,
+                       "n": self.n, "verify_n": self.verify_n, "family": self.family,
                        "converged": bool(self.designs) and self.designs[0].verified}
 
 
@@ -161,12 +167,16 @@ def design(point: DesignPoint, capture_deg: float, release_deg: float, vary,
     if unknown:
         raise ParameterError(f"bounds: {', '.join(unknown)} not varied (vary: "
                              f"{', '.join(vary)})")
-    bounds = default_bounds(point, vary) | given
-    for name, (lo, hi) in bounds.items():
+    for name, (lo, hi) in given.items():
         r = range_of(name)
-        if hi <= r.low or lo >= r.high:
-            raise ParameterError(f"bounds {name}: ({lo:g}, {hi:g}) lies outside the valid "
+        if not (r.contains(lo) and r.contains(hi)):
+            raise ParameterError(f"bounds {name}: ({lo:g}, {hi:g}) must lie within the valid "
                                  f"range {r.interval()}")
+        if name == "D" and lo <= 1.0 + point.radius():
+            raise ParameterError(f"bounds D: the lower bound {lo:g} must exceed 1 + magnet "
+                                 f"radius / L = {1.0 + point.radius():g} (the magnet would "
+                                 "touch the rod)")
+    bounds = default_bounds(point, vary) | given
     if not all(bounds[n][0] <= point.values[point.index(n)] <= bounds[n][1] for n in vary):
         # start inside the bounds: the geometric centre of the box
         values = list(point.values)

@@ -51,6 +51,7 @@ from jaxrod.analysis.calibration import (
     angles_from_folds,
     parameter_names,
     physical_parameters,
+    sign_hint,
     solve_program,
     start_states,
 )
@@ -214,7 +215,7 @@ def fit_youngs_modulus(measured, sigma_deg: float = 1.0, fit_offset: bool = Fals
     out = _fit_jit(
         jnp.asarray(np.nan_to_num(measured)), jnp.asarray(mask), float(sigma_deg),
         bool(fit_offset), setup, math.log(E0))
-    return _result(*out, mask, sigma_deg, fit_offset)
+    return _result(*out, mask, sigma_deg, fit_offset, measured)
 
 
 def fit_batch(measured, sigma_deg: float = 1.0, fit_offset: bool = False,
@@ -257,12 +258,12 @@ def fit_batch(measured, sigma_deg: float = 1.0, fit_offset: bool = False,
     m = jnp.asarray(np.nan_to_num(np.stack([r[0] for r in rows])))
     mask = jnp.asarray(np.stack([r[1] for r in rows]))
     out = _fit_batch_jit(m, mask, float(sigma_deg), bool(fit_offset), setup, math.log(E0))
-    return [_result(*(v[i] for v in out), np.asarray(mask[i]), sigma_deg, fit_offset)
-            for i in range(m.shape[0])]
+    return [_result(*(v[i] for v in out), np.asarray(mask[i]), sigma_deg, fit_offset,
+                    rows[i][0]) for i in range(m.shape[0])]
 
 
 def _result(p, res, std_log_e, std_off, ok, k, gnorm, settled, mask, sigma_deg,
-            fit_offset) -> FitResult:
+            fit_offset, measured=None) -> FitResult:
     E = float(np.exp(p[0]))
     residuals = [float(r) if mk else None for r, mk in zip(np.asarray(res), mask)]
     used = [r for r in residuals if r is not None]
@@ -281,6 +282,9 @@ def _result(p, res, std_log_e, std_off, ok, k, gnorm, settled, mask, sigma_deg,
         warning = (f"the residuals exceed sigma = {sigma_deg} deg (reduced chi^2 = "
                    f"{chi2 / dof:.3g}): the measurement error is larger than assumed, or the "
                    "angles' order or signs are wrong")
+    hint = sign_hint(np.nan_to_num(measured), mask) if measured is not None else None
+    if hint is not None:
+        warning = hint if warning is None else f"{warning}; {hint}"
     return FitResult(
         E_Pa=E, E_std_Pa=E * float(std_log_e), offset_deg=float(p[1]),
         offset_std_deg=float(std_off), residuals_deg=residuals, converged=not reasons,
@@ -461,6 +465,11 @@ def fit(measured, free=("E", OFFSET), point: DesignPoint | None = None,
         raise ParameterError("free: name at least one parameter to fit")
     priors = dict(priors or {})
     _check_names(priors, FREE_NAMES, "prior")
+    fixed = [name for name in priors if name not in free]
+    if fixed:
+        raise ParameterError(f"prior {fixed[0]}: {fixed[0]} is not free (free: "
+                             f"{', '.join(free)}); a prior acts on a fitted input only: add "
+                             "it to the free inputs, or drop the prior")
     for name, prior in priors.items():
         if not isinstance(prior, Prior):
             raise ParameterError(f"prior {name}: must be a Prior(mean, sd), got {prior!r:.60}")
@@ -533,6 +542,9 @@ def _calibration(point, problem, solution, free, priors, mask, n_rows) -> Calibr
         warnings.append(f"the residuals exceed sigma = {sigma:g} deg (reduced chi^2 = "
                         f"{reduced:.3g}): the model does not explain the angles within the "
                         "assumed error")
+    hint = sign_hint(np.asarray(problem.measured), mask)
+    if hint is not None:
+        warnings.append(hint)
     reasons = []
     if not bool(solution.found):
         reasons.append("the start has no two folds (no hysteresis there) or lies outside "
@@ -601,7 +613,7 @@ def profile(measured, name: str, free=("E", OFFSET), point: DesignPoint | None =
             cal = _fit_fixed_offset(measured, others, fixed_point, priors, sigma_deg, v, start)
         elif others:
             cal = fit(measured, others, fixed_point, {k: p for k, p in (priors or {}).items()
-                                                      if k != name}, sigma_deg, start=start)
+                                                      if k in others}, sigma_deg, start=start)
         else:
             cal = None
         if cal is None:
@@ -624,7 +636,7 @@ def _fit_fixed_offset(measured, others, point, priors, sigma_deg, offset, start)
     if not others:
         return None
     return fit(shifted, others, point, {k: p for k, p in (priors or {}).items()
-                                        if k != OFFSET}, sigma_deg, start=start)
+                                        if k in others}, sigma_deg, start=start)
 
 
 def _chi2_at(measured, point: DesignPoint, sigma_deg) -> float:

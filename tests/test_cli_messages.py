@@ -1,0 +1,66 @@
+"""Messages that name the problem (each failed on the last release): design's varied inputs
+and bounds, a family of designs, priors on fixed inputs and their standard deviations, a
+sign slip in the measured angles, fold-curve statuses in plain words, and the package's
+version and public names."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+import jaxrod as jr
+from jaxrod.cli import main
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "jaxrod.cli", *args], capture_output=True,
+                          text=True, timeout=600)
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["design", "--G", "2.2", "--capture", "30", "--release", "40", "--vary", "D,Q"],
+     "vary: unknown input 'Q'"),
+    (["design", "--G", "2.2", "--capture", "30", "--release", "40", "--vary", "D,D"],
+     "vary: an input is named twice"),
+    (["design", "--G", "2.2", "--capture", "30", "--release", "40", "--vary",
+      "track-radius,M"], "vary: track-radius is a physical input"),
+    (["design", "--G", "2.2", "--M", "0.0236", "--capture", "30", "--release", "40",
+      "--vary", "D", "--bounds", "D=0.9:1.5"], "bounds D:"),
+    (["fit", "--angles", "-25", "38", "24", "-42", "--prior", "remanence=8e5:4e4"],
+     "prior remanence: remanence is not free"),
+    (["fit", "--angles", "-25", "38", "24", "-42", "--free", "E,remanence", "--prior",
+      "remanence=8e5:-4e4"], "prior remanence: prior sd"),
+])
+def test_one_line_that_names_the_problem(argv, says):
+    proc = run(*argv)
+    assert proc.returncode == 2, proc.stderr
+    assert says in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+
+
+def test_three_inputs_for_two_targets_are_a_family(capsys):
+    code = main(["design", "--G", "2.2", "--M", "0.0236", "--D", "1.2", "--capture", "30",
+                 "--release", "40", "--vary", "D,M,G", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["family"] == 1 and len(out["solutions"]) >= 2
+
+
+def test_a_sign_slip_gets_a_hint(capsys):
+    assert main(["fit", "--angles", "25", "-38", "-24", "42", "--json"]) in (0, 1)
+    out = json.loads(capsys.readouterr().out)
+    assert any("signs are the opposite of the convention" in w for w in out["warnings"])
+    assert main(["fit", "--angles", "-25", "38", "24", "-42", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert not any("signs" in w for w in out["warnings"])
+
+
+def test_fold_curve_statuses_in_plain_words():
+    from jaxrod.solvers.fold_curve import CURVE_STATUS
+
+    for text in CURVE_STATUS.values():
+        assert "max_cusps" not in text and "lam" not in text.split(), text
+
+
+def test_version_and_public_names():
+    assert jr.__version__ != "unknown" and jr.__version__.count(".") >= 1
+    assert jr.FitSetup is not None and jr.FoldPairs is not None
