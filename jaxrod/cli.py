@@ -982,7 +982,7 @@ def cmd_design(args) -> int:
             values = ", ".join(f"{n} = {v:.10g} {UNITS[n]}".rstrip() for n, v in d.values.items())
             check = (f"locate_folds: {d.verified_capture_deg:.10f} / "
                      f"{d.verified_release_deg:.10f} deg" if d.verified_capture_deg is not None
-                     else "locate_folds found no two folds")
+                     else d.check)
             print(f"design {i + 1}: {values}  (model folds {d.capture_deg:.10f} / "
                   f"{d.release_deg:.10f} deg; {check}; verified: {d.verified})")
     ok = bool(result.designs) and result.designs[0].verified

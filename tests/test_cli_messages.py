@@ -64,3 +64,20 @@ def test_fold_curve_statuses_in_plain_words():
 def test_version_and_public_names():
     assert jr.__version__ != "unknown" and jr.__version__.count(".") >= 1
     assert jr.FitSetup is not None and jr.FoldPairs is not None
+
+
+def test_no_fold_is_listed_twice():
+    """At (2.2, 0.015, 1.0231) two of the branch's four fold starts reached one fold, which
+    was listed twice; the branch is re-traced with a finer step and four distinct folds
+    are listed (a second S-shape near 78-79 degrees)."""
+    report = jr.folds(jr.magnet_scene(2.2, 0.015, 1.0231))
+    alphas = sorted(f.alpha_deg for f in report.folds)
+    assert len(alphas) == 4 and min(b - a for a, b in zip(alphas, alphas[1:])) > 1e-3
+    assert report.converged
+
+
+def test_a_design_whose_branch_has_four_folds_says_so(capsys):
+    assert main(["design", "--G", "2.2", "--M", "0.0236", "--D", "1.2228", "--capture", "25",
+                 "--release", "85", "--vary", "D,M", "--json"]) == 1
+    out = json.loads(capsys.readouterr().out)
+    assert out["verified"] is False and "finds 4 folds" in out["check"]

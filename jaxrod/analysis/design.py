@@ -49,6 +49,8 @@ class Design:
     converged: bool
     verified: bool
     iterations: int
+    #: what the independent check found, in words, when it is not the two folds
+    check: str | None = None
 
     def as_dict(self) -> dict:
         return self.values | {"capture_deg": self.capture_deg,
@@ -56,7 +58,7 @@ class Design:
                               "verified_capture_deg": self.verified_capture_deg,
                               "verified_release_deg": self.verified_release_deg,
                               "converged": self.converged, "verified": self.verified,
-                              "iterations": self.iterations}
+                              "iterations": self.iterations, "check": self.check}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -221,13 +223,20 @@ def _verified(point: DesignPoint, candidate, capture, release, degree: int) -> D
     G, M, D = at.groups()
     report = locate_folds(make_scene(G, M, D, at.radius()), n=degree)
     folds = [f.alpha_deg for f in report.folds] if len(report.folds) == 2 else None
+    check = None
+    if folds is None:
+        angles = ", ".join(f"{f.alpha_deg:.6g}" for f in report.folds)
+        check = (f"locate_folds finds {len(report.folds)} folds on the branch through the "
+                 f"straight rod ({angles} deg), not two: the sweep's capture and release are "
+                 "not the model's pair of folds" if report.folds else
+                 "locate_folds finds no fold on the branch through the straight rod")
     verified = (folds is not None and report.converged
                 and abs(folds[0] - capture) <= VERIFY_DEG
                 and abs(folds[1] - release) <= VERIFY_DEG)
     return Design(values=values, capture_deg=float(model[2]), release_deg=float(model[1]),
                   verified_capture_deg=None if folds is None else folds[0],
                   verified_release_deg=None if folds is None else folds[1],
-                  converged=converged, verified=verified, iterations=iterations)
+                  converged=converged, verified=verified, iterations=iterations, check=check)
 
 
 def _infeasible(capture, release, vary, bounds, closest) -> str:

@@ -399,13 +399,18 @@ def _folds_on(scene, disc, branch: Branch, n: int, tol) -> FoldReport:
         if starts else []
     folds.sort(key=lambda f: f.alpha_deg)
     problems = []
+    same = [i for i in range(len(folds) - 1)
+            if abs(folds[i + 1].alpha_deg - folds[i].alpha_deg) < 1e-7
+            and abs(folds[i + 1].q - folds[i].q) < 1e-7]
+    if same:
+        # two starts reached one fold: it is listed once, and the branch is re-traced with a
+        # finer step (``locate_folds``) to find the fold that was missed
+        problems.append(f"{len(same)} fold start(s) converged to a fold already found: the "
+                        "folds lie close together (near a cusp) for the continuation's step")
+        folds = [f for i, f in enumerate(folds) if i - 1 not in same]
     if len(folds) == 2:
         folds = [dataclasses.replace(folds[0], kind="lower"),
                  dataclasses.replace(folds[1], kind="upper")]
-        if abs(folds[1].alpha_deg - folds[0].alpha_deg) < 1e-7:
-            problems.append("both fold starts converged to the same fold: the parameters are "
-                            "near the cusp where the folds merge; the continuation step is "
-                            "too coarse to separate them")
     else:
         folds = [dataclasses.replace(f, kind="fold") for f in folds]
     if not folds and np.nanmin(np.abs(branch.min_eig)) < NEAR_SINGULAR:
