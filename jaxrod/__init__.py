@@ -142,6 +142,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
     },
     "Long runs": {
         "Interrupted": ("jaxrod.progress", "Interrupted"),
+        "enable_caches": ("jaxrod.stored", "enable_caches"),
         "enable_store": ("jaxrod.stored", "enable_store"),
     },
 }

@@ -41,23 +41,13 @@ BATCH_N = 12
 
 
 def _enable_compilation_cache() -> None:
-    """Persist compiled programs between runs, and the traced programs of the main entry
-    points beside them (``jaxrod.stored``); set JAXROD_NO_CACHE=1 to disable."""
+    """The command line keeps its compiled programs between runs (``jr.enable_caches``);
+    set JAXROD_NO_CACHE=1 to disable."""
     if os.environ.get("JAXROD_NO_CACHE"):
         return
-    import jax
+    from jaxrod.stored import enable_caches
 
-    from jaxrod.stored import enable_store
-
-    cache = os.environ.get("JAXROD_CACHE_DIR",
-                           os.path.join(os.path.expanduser("~"), ".cache", "jaxrod", "xla"))
-    try:
-        os.makedirs(cache, exist_ok=True)
-        jax.config.update("jax_compilation_cache_dir", cache)
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
-        enable_store(os.path.join(cache, "exported"))
-    except OSError:
-        pass
+    enable_caches()
 
 
 def _float(name: str, valid: str | None = None):

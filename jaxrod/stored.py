@@ -46,6 +46,31 @@ def enable_store(directory: str | os.PathLike | None) -> None:
         _store[0].mkdir(parents=True, exist_ok=True)
 
 
+def default_cache_dir() -> Path:
+    """The folder of the caches: $JAXROD_CACHE_DIR, else ~/.cache/jaxrod/xla."""
+    return Path(os.environ.get("JAXROD_CACHE_DIR",
+                               os.path.join(os.path.expanduser("~"), ".cache", "jaxrod", "xla")))
+
+
+def enable_caches(directory: str | os.PathLike | None = None) -> Path | None:
+    """Keep compiled programs on disk for later processes, as the command line does: JAX's
+    persistent compilation cache (programs that took over 0.2 s to compile) and, beside it,
+    jaxrod's traced entry points (``enable_store``). A fresh Python process then loads what
+    an earlier one compiled instead of compiling it again (the README's tour: about 18 s of
+    compilation the first time, a few seconds after). ``directory``: default
+    ``default_cache_dir()``. Returns the folder, or None if it cannot be written (the caches
+    stay off; nothing else changes)."""
+    cache = Path(directory) if directory is not None else default_cache_dir()
+    try:
+        cache.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    jax.config.update("jax_compilation_cache_dir", str(cache))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
+    enable_store(cache / "exported")
+    return cache
+
+
 @functools.cache
 def _source_fingerprint() -> str:
     """jaxrod's version and the size and modification time of each of its source files."""

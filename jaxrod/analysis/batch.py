@@ -48,7 +48,7 @@ from jaxrod.solvers.folds import (
 from jaxrod.solvers.newton import newton
 
 #: The (q, alpha) grid that brackets the one-mode folds: q in [0, Q_MAX], alpha in [0, 90] deg.
-GRID_Q, GRID_ALPHA, Q_MAX = 40, 40, 1.6
+GRID_Q, GRID_ALPHA, Q_MAX = 32, 32, 1.6
 
 #: Bracketing cells counted per parameter set: "the last cell" is the last of the first
 #: CANDIDATES (at small clearances the grid's last crossed cells, near q = Q_MAX, lead the
@@ -181,14 +181,14 @@ def _crossed_cell(crossed, rank):
     return r, c
 
 
-def _cell_starts(crossed, cells: int, dq, dalpha):
-    """(2 cells, 2) one-mode starts (q, alpha) at the centres of the first and the last
-    ``cells`` crossed cells (row-major, the last among the first CANDIDATES); NaN for a slot
-    without a cell (a batch runs its Newton loops until the slowest element is done: a NaN
-    start ends its solve at the first pass)."""
+def _cell_starts(crossed, cells: int, end: str, dq, dalpha):
+    """(cells, 2) one-mode starts (q, alpha) at the centres of the first or the last
+    (``end``) ``cells`` crossed cells (row-major; the last among the first CANDIDATES); NaN
+    for a slot without a cell (a batch runs its Newton loops until the slowest element is
+    done: a NaN start ends its solve at the first pass)."""
     count = jnp.sum(crossed)
     k = jnp.arange(cells)
-    slot = jnp.concatenate([k, count - cells + k])
+    slot = k if end == "first" else count - cells + k
     used = (slot >= 0) & (slot < count)
     ia, iq = jax.vmap(lambda rank: _crossed_cell(crossed, rank))(
         jnp.clip(slot, 0, CANDIDATES - 1))
@@ -233,11 +233,13 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation, cells: int = 1):
     dq, da = _cell_linearisation(F0, F0q)
     touched = _sign_change(F0) & _sign_change(F0q)
     bracketing = touched & (jnp.abs(dq) <= REACH) & (jnp.abs(da) <= REACH)
-    # the first and the last ``cells`` of the grid cells that both contours cross
-    # (row-major: alpha first), and of those where they meet, start one-mode Newton solves;
-    # the converged one-mode folds of smallest and largest alpha are the lower and the upper
-    start = jnp.concatenate([_cell_starts(touched, cells, qs[1], al[1]),
-                             _cell_starts(bracketing, cells, qs[1], al[1])])
+    # one-mode Newton solves start from the first ``cells`` cells where the two contours
+    # meet (row-major: alpha first; where there is none, the first cells that both cross)
+    # and from the last ``cells`` cells that both cross; the converged one-mode folds of
+    # smallest and largest alpha are the lower and the upper fold
+    first = jnp.where(jnp.any(bracketing), bracketing, touched)
+    start = jnp.concatenate([_cell_starts(first, cells, "first", qs[1], al[1]),
+                             _cell_starts(touched, cells, "last", qs[1], al[1])])
 
     def one_mode(x0):
         residual = lambda x, _: jnp.stack(_one_mode_derivatives(
@@ -383,7 +385,7 @@ def continuation_pair(G, M, D, disc: PlanarDiscretisation):
 def _wider_program(G, M, D, n: int, cells: int):
     disc = planar_discretisation(n, "clamped")
     z, converged, _ = jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc, cells))(G, M, D)
-    return z, converged
+    return z[:, :, -1], converged
 
 
 @jit(static_argnames=("n",))
@@ -392,24 +394,24 @@ def _continuation_program(G, M, D, n: int):
     return jax.vmap(lambda g, m, d: continuation_pair(g, m, d, disc))(G, M, D)
 
 
-def resolve_failures(G, M, D, z, status, tier, n: int = 12):
+def resolve_failures(G, M, D, alphas, status, tier, n: int = 12):
     """Tiers 2 to 4 for the sets whose ``status`` is NOT_CONVERGED (arrays on the host,
-    updated in place; z the (K, 2, 2m + 1) fold states): the one-mode brackets from
+    updated in place; alphas (K, 2) the folds in radians): the one-mode brackets from
     RETRY_CELLS cells per end, then the batched continuation from the straight rod (which
     also certifies NOT_BISTABLE and FOLD_BEYOND_90), then ``locate_folds`` one by one. The
     batched tiers run in float64 on padded batches (``bucket``)."""
     retry = np.nonzero(status == NOT_CONVERGED)[0]
     if retry.size:  # tier 2
-        z2, ok2 = jax.device_get(_wider_program(*padded([G[retry], M[retry], D[retry]]),
+        a2, ok2 = jax.device_get(_wider_program(*padded([G[retry], M[retry], D[retry]]),
                                                 n=n, cells=RETRY_CELLS))
-        z2, ok2 = np.asarray(z2)[:retry.size], np.asarray(ok2)[:retry.size]
-        z[retry[ok2]], status[retry[ok2]], tier[retry] = z2[ok2], BISTABLE, 2
+        a2, ok2 = np.asarray(a2)[:retry.size], np.asarray(ok2)[:retry.size]
+        alphas[retry[ok2]], status[retry[ok2]], tier[retry] = a2[ok2], BISTABLE, 2
         retry = retry[~ok2]
     if retry.size:  # tier 3
         z3, code = jax.device_get(_continuation_program(
             *padded([G[retry], M[retry], D[retry]]), n=n))
-        z3, code = np.asarray(z3)[:retry.size], np.asarray(code)[:retry.size]
-        z[retry], status[retry], tier[retry] = z3, code, 3
+        a3, code = np.asarray(z3)[:retry.size, :, -1], np.asarray(code)[:retry.size]
+        alphas[retry], status[retry], tier[retry] = a3, code, 3
         retry = retry[code == NOT_CONVERGED]
     if retry.size:  # tier 4: one by one
         for i in retry:
@@ -417,12 +419,11 @@ def resolve_failures(G, M, D, z, status, tier, n: int = 12):
             tier[i] = 4
             kinds = {f.kind: f for f in rep.folds}
             if rep.converged and "lower" in kinds and "upper" in kinds:
-                z[i, :, -1] = np.radians([kinds["lower"].alpha_deg, kinds["upper"].alpha_deg])
-                z[i, :, :-1] = np.nan  # (a state of degree 16, not n: the angles only)
-                status[i] = FOLD_BEYOND_90 if z[i, 1, -1] > 0.5 * math.pi else BISTABLE
+                alphas[i] = np.radians([kinds["lower"].alpha_deg, kinds["upper"].alpha_deg])
+                status[i] = FOLD_BEYOND_90 if alphas[i, 1] > 0.5 * math.pi else BISTABLE
             elif rep.branch.complete and not rep.problems and len(rep.folds) < 2:
                 status[i] = NOT_BISTABLE
-    return z, status, tier
+    return alphas, status, tier
 
 
 def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64") -> FoldPairs:
@@ -457,29 +458,26 @@ def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64") -> FoldPairs:
     if k == 0:
         empty = np.zeros(0, np.int8)
         return FoldPairs(np.zeros((0, 2)), np.zeros(0, bool), empty, empty, empty)
-    z, ok, iterations = jax.device_get(fold_pairs_program(*padded([G, M, D]), n=n,
-                                                          dtype=dtype, states=True))
-    z = np.array(z[:k], np.float64)
+    alphas, ok, iterations = jax.device_get(fold_pairs_program(*padded([G, M, D]), n=n,
+                                                               dtype=dtype))
+    alphas = np.array(alphas[:k], np.float64)
     ok, iterations = np.asarray(ok[:k]), np.asarray(iterations[:k])
     status = np.where(ok, BISTABLE, NOT_CONVERGED).astype(np.int8)
     tier = np.ones(k, np.int8)
-    _, status, tier = resolve_failures(G, M, D, z, status, tier, n)
-    alphas = np.where((status == BISTABLE)[:, None], np.degrees(z[:, :, -1]), np.nan)
+    resolve_failures(G, M, D, alphas, status, tier, n)
+    alphas = np.where((status == BISTABLE)[:, None], np.degrees(alphas), np.nan)
     return FoldPairs(alphas, status == BISTABLE, status, tier, iterations)
 
 
-@jit(static_argnames=("n", "dtype", "states"))
-def fold_pairs_program(G, M, D, n: int = 12, dtype: str = "float64", states: bool = False):
+@jit(static_argnames=("n", "dtype"))
+def fold_pairs_program(G, M, D, n: int = 12, dtype: str = "float64"):
     """Tier 1 of ``fold_pairs`` alone, without the input checks and the fallback tiers: the
     compiled program itself (``.lower``). Returns (alphas (K, 2) radians, NaN where not
-    converged; converged (K,); Moore-Spence iterations (K,)), or with ``states`` the fold
-    states (K, 2, 2m + 1) in place of the angles. ``converged`` False means that this path
-    found no pair, not that there is none (``fold_pairs`` says which)."""
+    converged; converged (K,); Moore-Spence iterations (K,)). ``converged`` False means that
+    this path found no pair, not that there is none (``fold_pairs`` says which)."""
     disc = cast(planar_discretisation(n, "clamped"), dtype)
     G, M, D = (jnp.asarray(v, dtype) for v in (G, M, D))
     with jax.default_matmul_precision("highest"):
         z, converged, iterations = jax.vmap(
             lambda g, m, d: fold_pair_states(g, m, d, disc))(G, M, D)
-    if states:
-        return z, converged, iterations
     return jnp.where(converged[:, None], z[:, :, -1], jnp.nan), converged, iterations

@@ -155,7 +155,7 @@ def _validity(point: DesignPoint, values: np.ndarray) -> np.ndarray:
 def _chunk_program(G, M, D, n):
     disc = planar_discretisation(n, "clamped")
     z, converged, _ = jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc))(G, M, D)
-    return z, converged
+    return z[:, :, -1], converged
 
 
 @functools.lru_cache(maxsize=16)
@@ -192,18 +192,18 @@ def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
     stand_in = values[np.argmax(valid)] if valid.any() else np.asarray(point.values)
     g0, m0, d0 = (float(v) for v in groups_of(point.kind, stand_in))
     G, M, D = (np.where(valid, v, s) for v, s in ((G, g0), (M, m0), (D, d0)))
-    z = np.full((k, 2, 2 * planar_discretisation(n, "clamped").size + 1), np.nan)
+    alphas = np.full((k, 2), np.nan)
     reason = np.where(valid, NOT_CONVERGED, INVALID_INPUT).astype(np.int8)
     if valid.any():
         program, mesh = _per_device(tuple(devices), n)
         inputs, _ = _sharded([G, M, D], mesh)
-        z1, ok = jax.device_get(program(*inputs))
-        z1, ok = np.asarray(z1)[:k], np.asarray(ok)[:k] & valid
-        z[ok] = z1[ok]
+        a1, ok = jax.device_get(program(*inputs))
+        a1, ok = np.asarray(a1)[:k], np.asarray(ok)[:k] & valid
+        alphas[ok] = a1[ok]
         reason[ok] = OK
         with jax.default_device(devices[0]):  # the retry tiers: a small share of a map
-            resolve_failures(G, M, D, z, reason, np.ones(k, np.int8), n)
-    alphas = np.where((reason == OK)[:, None], z[:, :, -1], np.nan)
+            resolve_failures(G, M, D, alphas, reason, np.ones(k, np.int8), n)
+    alphas = np.where((reason == OK)[:, None], alphas, np.nan)
     deg = np.degrees(alphas)
     return {"capture_deg": deg[:, 0], "release_deg": deg[:, 1],
             "width_deg": deg[:, 1] - deg[:, 0], "reason": reason}
