@@ -187,3 +187,18 @@ def test_near_the_cusp_every_answer_is_that_of_locate_folds():
         assert res.bistable[i] == pair, (G[i], M[i], Ds[i], res.messages()[i])
         if pair:
             assert np.max(np.abs(res.alpha_deg[i] - [kinds["lower"], kinds["upper"]])) < 1e-8
+
+
+def test_a_loop_narrower_than_a_continuation_step_is_not_called_not_bistable():
+    """Next to the cusp (loops of 0.005 and 0.002 degrees) two folds can lie within one step
+    of the batched continuation, which then passes no fold; its certificate "not bistable"
+    now also needs the Hessian's smallest eigenvalue to stay clear of zero, else the set
+    goes to ``locate_folds`` (which re-traces finer). Both sets: the pair of locate_folds."""
+    M_grid, D_grid = np.linspace(0.015, 0.035, 100), np.linspace(1.05, 1.35, 100)
+    M, Ds = M_grid[[1, 4]], D_grid[[74, 75]]
+    res = fold_pairs(np.full(2, 2.2), M, Ds)
+    assert res.bistable.all(), res.messages()
+    for i in range(2):
+        ref = _reference(2.2, M[i], Ds[i], n=12)
+        assert len(ref) == 2 and ref[1] - ref[0] < 0.01
+        assert np.max(np.abs(res.alpha_deg[i] - ref)) < 1e-9

@@ -115,3 +115,15 @@ def test_calibration_quick(tmp_path):
     assert result["fits_failed"] == 0 and result["with_two_folds"] == 40
     for c in result["coverage"].values():
         assert abs(c["covered_68"] - 0.68) <= 3 * (0.68 * 0.32 / 40) ** 0.5
+
+
+def test_fold_pair_coverage_quick(tmp_path):
+    """``fold_pairs`` against ``locate_folds`` on 401 sets (the D sweep at the paper's G and
+    M, a D-M map across the cusp, random sets of the design ranges): no set missed,
+    spurious, off by more than 1e-9 degrees or left unknown."""
+    result = run_quick("fold_pair_coverage.py", tmp_path)
+    for row in result["rows"]:
+        assert row["agree"] == row["sets"], row
+        assert row["missed"] == row["spurious"] == row["off"] == row["unknown"] == 0, row
+    assert set(result["throughput"]["pairs_per_s"]) >= {"fold_pairs (all tiers)",
+                                                         "tier 1 alone (fold_pairs_program)"}

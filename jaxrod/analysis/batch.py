@@ -32,7 +32,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.analysis.magnet import default_options, locate_folds, run_to_second_fold
+from jaxrod.analysis.magnet import (
+    NEAR_SINGULAR,
+    default_options,
+    locate_folds,
+    run_to_second_fold,
+)
 from jaxrod.analysis.reduction import normalised_mode
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import RANGES, ParameterError, check_degree
@@ -358,10 +363,14 @@ def continuation_pair(G, M, D, disc: PlanarDiscretisation):
     """(fold states (2, 2m + 1), status) of one parameter set by the ``locate_folds``
     algorithm (vmap it): the continuation in alpha from the straight rod up to 180 degrees
     that stops after two folds (``run_to_second_fold``), then Moore-Spence at both. Fewer
-    than two folds when the run reaches its bound certifies NOT_BISTABLE."""
+    than two folds when the run reaches its bound certifies NOT_BISTABLE, unless the
+    Hessian's smallest eigenvalue came within ``NEAR_SINGULAR`` of zero on the way: two
+    folds near a cusp can hide within one step (a loop of 1e-3 degrees), and such a set is
+    left NOT_CONVERGED for ``locate_folds``, which re-traces with a finer step."""
     scene = DipoleMagnet(G, M, D, 0.0)
     args = (scene, disc)
-    raw, theta, alpha, phi, folds = run_to_second_fold(scene, disc, jnp.pi, RETRY_CAPACITY)
+    raw, theta, alpha, phi, folds = run_to_second_fold(scene, disc, jnp.pi, RETRY_CAPACITY,
+                                                       spectrum=True)
     started = raw.residual_norm[0] <= default_options().tol
 
     def refine(theta, alpha, phi):
@@ -375,7 +384,10 @@ def continuation_pair(G, M, D, disc: PlanarDiscretisation):
     two = started & (folds >= 2)
     solved = two & jnp.all(ok) & (alphas[0] > 0.0) & (alphas[1] - alphas[0] > 1e-9)
     beyond = solved & (alphas[1] > 0.5 * jnp.pi)
-    ended = raw.status == REACHED_BOUND  # the run went to its bound: its fold count is final
+    recorded = jnp.arange(raw.min_eig.shape[0]) < raw.num_points
+    clear = jnp.min(jnp.where(recorded, jnp.abs(raw.min_eig), jnp.inf)) >= NEAR_SINGULAR
+    # the run went to its bound, clear of singular Hessians: its fold count is final
+    ended = (raw.status == REACHED_BOUND) & clear
     status = jnp.where(solved, jnp.where(beyond, FOLD_BEYOND_90, BISTABLE),
                        jnp.where(started & ~two & ended, NOT_BISTABLE, NOT_CONVERGED))
     return z, status
@@ -415,7 +427,7 @@ def resolve_failures(G, M, D, alphas, status, tier, n: int = 12):
         retry = retry[code == NOT_CONVERGED]
     if retry.size:  # tier 4: one by one
         for i in retry:
-            rep = locate_folds(DipoleMagnet(G[i], M[i], D[i], 0.0), n=max(n, 16))
+            rep = locate_folds(DipoleMagnet(G[i], M[i], D[i], 0.0), n=n)
             tier[i] = 4
             kinds = {f.kind: f for f in rep.folds}
             if rep.converged and "lower" in kinds and "upper" in kinds:
