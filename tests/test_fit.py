@@ -105,3 +105,18 @@ def test_cli_fit_bad_input(argv, name):
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and name in lines[0], proc.stderr
+
+
+@pytest.mark.parametrize("D", [1.19, 1.0553])
+def test_recovery_at_clearances_where_the_one_mode_brackets_missed(D):
+    """At D = 1.19 the last release's fit started from the one-mode brackets alone, found no
+    two folds and gave up ("no two folds ... within 0 iterations"); at D = 1.0553 the brackets
+    still find none (the upper fold's tip at 72 degrees) and the fit starts from the
+    continuation. Exact angles (continuation route, ``model_angles``) give E back."""
+    base = fit.setup_from_preset()
+    setup = fit.FitSetup(base.G_ref, base.M_ref, D, base.E_ref)
+    angles, ok = fit.model_angles(np.array([math.log(170e9), 0.0]), setup)
+    assert bool(ok)
+    result = fit.fit_youngs_modulus(np.asarray(angles), 1.0, False, setup)
+    assert result["converged"], result["reason"]
+    assert abs(result["E_Pa"] / 170e9 - 1.0) < 1e-9
