@@ -81,3 +81,27 @@ def test_a_design_whose_branch_has_four_folds_says_so(capsys):
                  "--release", "85", "--vary", "D,M", "--json"]) == 1
     out = json.loads(capsys.readouterr().out)
     assert out["verified"] is False and "finds 4 folds" in out["check"]
+
+
+def test_enable_caches_keeps_programs_on_disk(tmp_path):
+    """``jr.enable_caches`` (documented in the README's tour) sets JAX's persistent cache
+    and jaxrod's store of traced programs to one folder, which a first call fills (in a
+    fresh process: it changes the process's JAX configuration)."""
+    code = (f"import jax, jaxrod as jr; d = jr.enable_caches({str(tmp_path)!r}); "
+            "assert jax.config.jax_compilation_cache_dir == str(d); "
+            "jr.folds(jr.magnet_scene(2.2, 0.0236, 1.2228), n=12); "
+            "import pathlib; p = pathlib.Path(d); "
+            "assert any(p.glob('exported/*')), list(p.iterdir()); "
+            "assert any(f.name != 'exported' for f in p.iterdir()); print('ok')")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0 and "ok" in proc.stdout, proc.stderr[-2000:]
+
+
+def test_the_readme_says_how_long_the_docs_take_and_how_to_skip_the_notebooks():
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    readme = (root / "README.md").read_text()
+    assert "JAXROD_DOCS_EXECUTE=0" in readme and "minutes" in readme
+    assert 'os.environ.get("JAXROD_DOCS_EXECUTE") == "0"' in (root / "docs" / "conf.py").read_text()
