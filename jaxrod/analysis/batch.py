@@ -369,8 +369,7 @@ def continuation_pair(G, M, D, disc: PlanarDiscretisation):
     left NOT_CONVERGED for ``locate_folds``, which re-traces with a finer step."""
     scene = DipoleMagnet(G, M, D, 0.0)
     args = (scene, disc)
-    raw, theta, alpha, phi, folds = run_to_second_fold(scene, disc, jnp.pi, RETRY_CAPACITY,
-                                                       spectrum=True)
+    raw, theta, alpha, phi, folds = run_to_second_fold(scene, disc, jnp.pi, RETRY_CAPACITY)
     started = raw.residual_norm[0] <= default_options().tol
 
     def refine(theta, alpha, phi):
@@ -384,8 +383,10 @@ def continuation_pair(G, M, D, disc: PlanarDiscretisation):
     two = started & (folds >= 2)
     solved = two & jnp.all(ok) & (alphas[0] > 0.0) & (alphas[1] - alphas[0] > 1e-9)
     beyond = solved & (alphas[1] > 0.5 * jnp.pi)
-    recorded = jnp.arange(raw.min_eig.shape[0]) < raw.num_points
-    clear = jnp.min(jnp.where(recorded, jnp.abs(raw.min_eig), jnp.inf)) >= NEAR_SINGULAR
+    recorded = jnp.arange(raw.lam.shape[0]) < raw.num_points
+    nearest_zero = jax.vmap(lambda x, lam: dense.smallest_eigenvalue_magnitude(
+        ALPHA_MODEL.hessian(x, lam, args)))(raw.x, raw.lam)
+    clear = jnp.min(jnp.where(recorded, nearest_zero, jnp.inf)) >= NEAR_SINGULAR
     # the run went to its bound, clear of singular Hessians: its fold count is final
     ended = (raw.status == REACHED_BOUND) & clear
     status = jnp.where(solved, jnp.where(beyond, FOLD_BEYOND_90, BISTABLE),

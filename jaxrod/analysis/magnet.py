@@ -219,8 +219,7 @@ FOLD_PAIR_CAPACITY = 128
 
 
 def run_to_second_fold(scene: DipoleMagnet, disc: PlanarDiscretisation,
-                       alpha_max: float = math.pi / 2, capacity: int = FOLD_PAIR_CAPACITY,
-                       spectrum: bool = False):
+                       alpha_max: float = math.pi / 2, capacity: int = FOLD_PAIR_CAPACITY):
     """The continuation in alpha from the straight rod at alpha = 0 that stops after the
     second fold (or at ``alpha_max``), and its approximate folds: (run, states, angles,
     null-vector guesses, number of folds passed).
@@ -228,12 +227,11 @@ def run_to_second_fold(scene: DipoleMagnet, disc: PlanarDiscretisation,
     The straight rod is an equilibrium at alpha = 0 for every (G, M, D) by the mirror
     symmetry theta -> -theta of E_perm there (no Newton solve needed; the run records its
     residual). At the recorded point nearest each fold the state part of the branch's
-    tangent is the null-vector guess (at the fold it is the Hessian's kernel). With
-    ``spectrum`` the run records the Hessian's smallest eigenvalue at each point.
+    tangent is the null-vector guess (at the fold it is the Hessian's kernel).
     """
     options = default_options(0)._replace(max_folds=2.0, lam_min=-0.1, lam_max=alpha_max)
     raw = continuation_run(ALPHA_MODEL, jnp.zeros(disc.size), 0.0, (scene, disc), options,
-                           capacity, 1.0, spectrum=spectrum)
+                           capacity, 1.0, spectrum=False)
     t = raw.tangent_lam
     change = t[:-1] * t[1:] < 0.0
     i = jnp.nonzero(change, size=2, fill_value=0)[0]
