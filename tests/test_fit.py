@@ -107,11 +107,11 @@ def test_cli_fit_bad_input(argv, name):
     assert len(lines) == 1 and name in lines[0], proc.stderr
 
 
-@pytest.mark.parametrize("D", [1.19, 1.0553])
+@pytest.mark.parametrize("D", [1.19, 1.0575])
 def test_recovery_at_clearances_where_the_one_mode_brackets_missed(D):
     """At D = 1.19 the last release's fit started from the one-mode brackets alone, found no
-    two folds and gave up ("no two folds ... within 0 iterations"); at D = 1.0553 the brackets
-    still find none (the upper fold's tip at 72 degrees) and the fit starts from the
+    two folds and gave up ("no two folds ... within 0 iterations"); near D = 1.0575 (the upper
+    fold's tip at ~70 degrees) the brackets miss some sets, and the fit then starts from the
     continuation. Exact angles (continuation route, ``model_angles``) give E back."""
     base = fit.setup_from_preset()
     setup = fit.FitSetup(base.G_ref, base.M_ref, D, base.E_ref)

@@ -465,16 +465,16 @@ def fit(measured, free=("E", OFFSET), point: DesignPoint | None = None,
         raise ParameterError("free: name at least one parameter to fit")
     priors = dict(priors or {})
     _check_names(priors, FREE_NAMES, "prior")
-    fixed = [name for name in priors if name not in free]
-    if fixed:
-        raise ParameterError(f"prior {fixed[0]}: {fixed[0]} is not free (free: "
-                             f"{', '.join(free)}); a prior acts on a fitted input only: add "
-                             "it to the free inputs, or drop the prior")
     for name, prior in priors.items():
         if not isinstance(prior, Prior):
             raise ParameterError(f"prior {name}: must be a Prior(mean, sd), got {prior!r:.60}")
         if name != OFFSET:
             range_of(name).check(prior.mean)
+    fixed = [name for name in priors if name not in free]
+    if fixed:
+        raise ParameterError(f"prior {fixed[0]}: {fixed[0]} is not free (free: "
+                             f"{', '.join(free)}); a prior acts on a fitted input only: add "
+                             "it to the free inputs, or drop the prior")
     bounds = _check_bounds(dict(bounds or {}), point)
     p_start = _start_vector(point, start or {}, free)
     n_data = int(mask.sum())
