@@ -125,5 +125,5 @@ def test_fold_pair_coverage_quick(tmp_path):
     for row in result["rows"]:
         assert row["agree"] == row["sets"], row
         assert row["missed"] == row["spurious"] == row["off"] == row["unknown"] == 0, row
-    assert set(result["throughput"]["pairs_per_s"]) >= {"fold_pairs (all tiers)",
-                                                         "tier 1 alone (fold_pairs_program)"}
+    assert set(result["throughput"][0]["pairs_per_s"]) >= {"fold_pairs (all tiers)",
+                                                            "tier 1 alone (fold_pairs_program)"}

@@ -356,6 +356,8 @@ def padded(arrays, size: int | None = None):
     (a valid parameter set; the padding's answers are dropped)."""
     k = arrays[0].shape[0]
     size = bucket(k) if size is None else size
+    if size == k:
+        return list(arrays)
     return [np.concatenate([a, np.repeat(a[:1], size - k)]) for a in arrays]
 
 
@@ -471,15 +473,16 @@ def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64") -> FoldPairs:
     if k == 0:
         empty = np.zeros(0, np.int8)
         return FoldPairs(np.zeros((0, 2)), np.zeros(0, bool), empty, empty, empty)
-    alphas, ok, iterations = jax.device_get(fold_pairs_program(*padded([G, M, D]), n=n,
-                                                               dtype=dtype))
-    alphas = np.array(alphas[:k], np.float64)
-    ok, iterations = np.asarray(ok[:k]), np.asarray(iterations[:k])
+    alphas, ok, iterations = (np.asarray(a)[:k] for a in fold_pairs_program(
+        *padded([G, M, D]), n=n, dtype=dtype))
+    alphas = alphas.astype(np.float64)  # (a copy: the fallback tiers write into it)
     status = np.where(ok, BISTABLE, NOT_CONVERGED).astype(np.int8)
     tier = np.ones(k, np.int8)
-    resolve_failures(G, M, D, alphas, status, tier, n)
-    alphas = np.where((status == BISTABLE)[:, None], np.degrees(alphas), np.nan)
-    return FoldPairs(alphas, status == BISTABLE, status, tier, iterations)
+    if not ok.all():
+        resolve_failures(G, M, D, alphas, status, tier, n)
+    bistable = status == BISTABLE
+    return FoldPairs(np.where(bistable[:, None], np.degrees(alphas), np.nan), bistable, status,
+                     tier, iterations)
 
 
 @jit(static_argnames=("n", "dtype"))
