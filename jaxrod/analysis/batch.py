@@ -285,13 +285,6 @@ def fold_pair_states(G, M, D, disc: PlanarDiscretisation, cells: int = 1):
     return z, converged, jnp.max(ms.iterations)
 
 
-def fold_pair_one(G, M, D, disc: PlanarDiscretisation):
-    """(alpha_lower, alpha_upper) in radians, converged, Moore-Spence iterations (one
-    parameter set; vmap it): the angles of ``fold_pair_states``."""
-    z, converged, iterations = fold_pair_states(G, M, D, disc)
-    return z[:, -1], converged, iterations
-
-
 def cast(disc: PlanarDiscretisation, dtype) -> PlanarDiscretisation:
     """The discretisation with its arrays in ``dtype`` (float32 for the fast GPU path)."""
     return jax.tree_util.tree_map(lambda a: a.astype(dtype), disc)
@@ -396,11 +389,15 @@ def continuation_pair(G, M, D, disc: PlanarDiscretisation):
     return z, status
 
 
-@jit(static_argnames=("n", "cells"))
-def _wider_program(G, M, D, n: int, cells: int):
+def batch_fold_angles(G, M, D, n: int, cells: int = 1):
+    """(alphas (K, 2) radians, converged (K,)) of ``fold_pair_states`` over arrays G, M, D,
+    float64 (tier 1 of a map's chunk with ``cells`` = 1, tier 2 with ``RETRY_CELLS``)."""
     disc = planar_discretisation(n, "clamped")
     z, converged, _ = jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc, cells))(G, M, D)
     return z[:, :, -1], converged
+
+
+_wider_program = jit(batch_fold_angles, static_argnames=("n", "cells"))
 
 
 @jit(static_argnames=("n",))

@@ -61,7 +61,7 @@ from jaxrod.analysis.batch import (  # noqa: F401 (the reason codes, re-exported
     NOT_BISTABLE,
     NOT_CONVERGED,
     STATUS,
-    fold_pair_states,
+    batch_fold_angles,
     resolve_failures,
 )
 from jaxrod.analysis.fold_curves import (
@@ -71,7 +71,6 @@ from jaxrod.analysis.fold_curves import (
     groups_of,
     range_of,
 )
-from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import UNITS, ParameterError
 from jaxrod.programs import jit
 from jaxrod.progress import ctrl_c_guard, interrupt_requested, progress_bar
@@ -152,12 +151,6 @@ def _validity(point: DesignPoint, values: np.ndarray) -> np.ndarray:
 # --- tier 1 sharded over devices; tiers 2 to 4 are ``batch.resolve_failures`` -----------
 
 
-def _chunk_program(G, M, D, n):
-    disc = planar_discretisation(n, "clamped")
-    z, converged, _ = jax.vmap(lambda g, m, d: fold_pair_states(g, m, d, disc))(G, M, D)
-    return z[:, :, -1], converged
-
-
 @functools.lru_cache(maxsize=16)
 def _per_device(devices: tuple, n: int):
     """The batched fold-pair program as one independent program per device
@@ -165,7 +158,7 @@ def _per_device(devices: tuple, n: int):
     loops to its own slowest point, with no collective in the loop conditions."""
     mesh = jax.sharding.Mesh(np.asarray(devices), ("points",))
     spec = jax.sharding.PartitionSpec("points")
-    fn = functools.partial(_chunk_program, n=n)
+    fn = functools.partial(batch_fold_angles, n=n)
     return jit(jax.shard_map(fn, mesh=mesh, in_specs=(spec, spec, spec),
                              out_specs=(spec, spec), check_vma=False)), mesh
 
