@@ -136,7 +136,9 @@ class Structured(EnergyModel):
     ``scene_at(lam, args) -> (scene, disc)``. The scene provides ``density(a, s)`` (scalar
     energy density of the jet a at node s), and for an endpoint term ``tip_map(a)`` (the
     k-vector integrand of X) and ``endpoint(X)`` (scalar); ``tip_map = None`` means no
-    endpoint term. The discretisation provides ``jet_matrix`` (nq, r, m), ``quad_weights``
+    endpoint term. A scene with ``has_distributed`` adds ``distributed_energy(x, disc)``
+    (terms of the positions along the rod), differentiated by autodiff as a whole. The
+    discretisation provides ``jet_matrix`` (nq, r, m), ``quad_weights``
     and ``quad_nodes``.
     """
 
@@ -156,7 +158,14 @@ class Structured(EnergyModel):
         e = jnp.dot(w, jax.vmap(scene.density)(a, s))
         if scene.tip_map is not None:
             e = e + scene.endpoint(self._tip(scene, a, w))
-        return e
+        return e + self._distributed(x, lam, args)
+
+    def _distributed(self, x, lam, args):
+        """The scene's distributed terms (positions along the rod), 0 without them."""
+        scene, disc = self.scene_at(lam, args)
+        if not getattr(scene, "has_distributed", False):
+            return jnp.zeros((), x.dtype)
+        return scene.distributed_energy(x, disc)
 
     def _local(self, scene, a, w):
         """l_j(a) = w_j [rho(a, s_j) + g . chi(a)] with g = grad Psi(X) held fixed, X, and
@@ -171,7 +180,10 @@ class Structured(EnergyModel):
     def gradient(self, x, lam, args):
         scene, L, a, w, s = self._setup(x, lam, args)
         local, _, _ = self._local(scene, a, w)
-        return jnp.einsum("jrm,jr->m", L, jax.vmap(jax.grad(local))(a, s, w))
+        F = jnp.einsum("jrm,jr->m", L, jax.vmap(jax.grad(local))(a, s, w))
+        if getattr(scene, "has_distributed", False):
+            F = F + jax.grad(self._distributed)(x, lam, args)
+        return F
 
     def hessian(self, x, lam, args):
         return self.gradient_and_hessian(x, lam, args)[1]
@@ -186,6 +198,9 @@ class Structured(EnergyModel):
             chi_a = jax.vmap(jax.jacfwd(scene.tip_map))(a)  # (nq, k, r)
             B = jnp.einsum("j,jkr,jrm->km", w, chi_a, L)
             H = H + B.T @ P @ B
+        if getattr(scene, "has_distributed", False):
+            F = F + jax.grad(self._distributed)(x, lam, args)
+            H = H + jax.hessian(self._distributed)(x, lam, args)
         return F, H
 
 

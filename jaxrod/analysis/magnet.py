@@ -20,8 +20,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.analysis.branch import Branch, branch_from_runs
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
+from jaxrod.equilibria.record import Branch, branch_from_runs
 from jaxrod.params import RANGES, check, check_degree, check_track_clearance
 from jaxrod.programs import jit
 from jaxrod.progress import Interrupted

@@ -51,7 +51,7 @@ from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
-from jaxrod.scenes.terms import bending_energy
+from jaxrod.scenes.functionals import bending_energy
 from jaxrod.solvers import dense
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.newton import implicit_newton, newton

@@ -24,7 +24,7 @@ import jax.numpy as jnp
 
 from jaxrod.derivatives import Structured
 from jaxrod.discretise.planar import PlanarDiscretisation
-from jaxrod.scenes.terms import bending_energy, gravity_energy
+from jaxrod.scenes.functionals import bending_energy, gravity_energy
 
 
 def magnet_direction(alpha):

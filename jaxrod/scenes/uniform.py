@@ -18,7 +18,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrod.discretise.planar import PlanarDiscretisation
-from jaxrod.scenes.terms import anisotropy_energy, bending_energy, gravity_energy
+from jaxrod.scenes.functionals import anisotropy_energy, bending_energy, gravity_energy
 
 
 @jax.tree_util.register_dataclass

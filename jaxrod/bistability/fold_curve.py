@@ -1,0 +1,161 @@
+"""The fold curve of any scene in two of its inputs (``vary``, ``along``), and its cusps.
+
+A fold in ``vary`` moves as a second input ``along`` changes: pseudo-arclength continuation
+of the Moore-Spence system in (x, phi, v, u) (``jaxrod.solvers.fold_curve``), both inputs on
+their scaled coordinates (v = start + span lam, u the same for ``along``), from a fold found
+on the branch. Along the curve the quadratic coefficient F_qq = D^3E[phi, phi, phi] is
+recorded; where it changes sign the curve passes a cusp (the two folds meet and the
+hysteresis closes).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.derivatives import Structured
+from jaxrod.equilibria.branch import check_range
+from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, tip
+from jaxrod.equilibria.folds import Fold, folds
+from jaxrod.params import ParameterError
+from jaxrod.programs import jit
+from jaxrod.scenes.scene import Input, Scene
+from jaxrod.solvers.continuation import STATUS_MESSAGES
+from jaxrod.solvers.fold_curve import CURVE_STATUS, FoldCurveOptions, fold_curve_run, split
+
+CAPACITY = 400
+
+
+@dataclasses.dataclass(frozen=True)
+class Second:
+    """``args_at`` of the fold-curve solver: the second input on its scaled coordinate, with
+    args = (scene, disc, origin, span, origin2, span2)."""
+
+    key: str
+
+    def __call__(self, u, args):
+        scene, disc, origin, span, origin2, span2 = args
+        return scene.replace(self.key, origin2 + span2 * u), disc, origin, span
+
+
+@dataclasses.dataclass(frozen=True)
+class FoldCurve:
+    """Points of a fold curve (both directions from the starting fold, joined in order of
+    ``along``), with the cusp test F_qq / |phi|^3 at each and the cusps passed.
+
+    ``along_values``: the second input; ``values``: ``vary`` at the fold; ``tip_angle_deg``:
+    the tip at the fold; ``status``: why each direction ended.
+    """
+
+    vary: str
+    along: str
+    along_values: np.ndarray
+    values: np.ndarray
+    tip_angle_deg: np.ndarray
+    cusp_test: np.ndarray
+    status: tuple[str, ...]
+    start: Fold
+
+    @property
+    def cusp_indices(self) -> np.ndarray:
+        """i such that a cusp lies between points i and i + 1 (F_qq changes sign)."""
+        c = self.cusp_test
+        return np.nonzero(np.sign(c[:-1]) * np.sign(c[1:]) < 0)[0]
+
+    def plot(self, ax=None):
+        """``vary`` at the fold against ``along``; cusps marked."""
+        import matplotlib.pyplot as plt
+
+        ax = ax or plt.gca()
+        ax.plot(self.along_values, self.values, "-", color="C0", label=f"fold in {self.vary}")
+        i = self.cusp_indices
+        ax.plot(self.along_values[i], self.values[i], "k^", label="cusp")
+        ax.set_xlabel(self.along)
+        ax.set_ylabel(self.vary)
+        return ax
+
+
+def _curve_program(w0, directions, scene, disc, origin, span, origin2, span2, opts, capacity,
+                   vary, along):
+    model = Structured(Input(vary))
+    args = (scene, disc, origin, span, origin2, span2)
+    second = Second(along)
+    runs = jax.vmap(lambda d: fold_curve_run(model, second, w0, args, opts, capacity, d))(
+        directions)
+    m = disc.size
+
+    def observe(w):
+        x, _, lam, u = split(w, m)
+        at = scene.replace(along, origin2 + span2 * u).replace(vary, origin + span * lam)
+        return tip(at, x, disc)[0]
+
+    return runs, jax.vmap(jax.vmap(observe))(runs.w)
+
+
+_program = jit(_curve_program, static_argnames=("capacity", "vary", "along"))
+
+
+def fold_curve(scene: Scene, vary: str, vary_range: tuple[float, float], along: str,
+               along_range: tuple[float, float], which: int = 0, n: int = DEFAULT_N,
+               ds_max: float = 0.02) -> FoldCurve:
+    """The fold curve through the ``which``-th fold met along ``vary`` (over ``vary_range``,
+    at the scene's value of ``along``), followed in ``along`` over ``along_range``.
+
+    Solves R(x, phi, v; u) = [grad E; H phi; l . phi - 1] = 0 along the curve (paper: the
+    fold curves of section "Fold curves and the cusp", for any scene).
+    """
+    start, stop = check_range(scene, vary, *vary_range)
+    a0, a1 = check_range(scene, along, *along_range)
+    if along == vary:
+        raise ParameterError(f"along must differ from vary ({vary})")
+    u_now = float(scene.value(along))
+    if not min(a0, a1) <= u_now <= max(a0, a1):
+        raise ParameterError(f"the scene's {along} = {u_now:g} is outside along_range "
+                             f"[{min(a0, a1):g}, {max(a0, a1):g}]")
+    found = folds(scene, vary, start, stop, n)
+    if len(found) <= which:
+        raise ParameterError(f"the branch in {vary} from {start:g} to {stop:g} has "
+                             f"{len(found)} fold(s); which = {which} asks for fold "
+                             f"{which + 1}")
+    f = found[which]
+    disc = discretise(scene, n)
+    lo, hi = min(start, stop), max(start, stop)
+    origin, span = lo, hi - lo
+    origin2, span2 = min(a0, a1), abs(a1 - a0)
+    w0 = jnp.concatenate([jnp.asarray(f.state), jnp.asarray(f.null_vector),
+                          jnp.array([(f.value - origin) / span, (u_now - origin2) / span2])])
+    opts = FoldCurveOptions(ds=0.01, ds_max=ds_max, u_min=0.0, u_max=1.0, lam_min=0.0,
+                            lam_max=1.0)
+    runs, angle = jax.device_get(_program(w0, jnp.array([-1.0, 1.0]), scene, disc, origin,
+                                          span, origin2, span2, opts, CAPACITY, vary, along))
+    m = disc.size
+    parts, status = [], []
+    for i, rev in ((0, True), (1, False)):
+        k = int(runs.num_points[i])
+        w = runs.w[i, :k]
+        cols = [origin2 + span2 * w[:, 2 * m + 1], origin + span * w[:, 2 * m],
+                np.degrees(angle[i, :k]), runs.cusp_test[i, :k]]
+        cols = [c[::-1] if rev else c for c in cols]
+        parts.append([c[:-1] if rev else c for c in cols])  # the start point once
+        status.append((CURVE_STATUS | STATUS_MESSAGES)[int(runs.status[i])])
+    cat = [np.concatenate([p[j] for p in parts]) for j in range(4)]
+    return FoldCurve(vary=vary, along=along, along_values=cat[0], values=cat[1],
+                     tip_angle_deg=cat[2], cusp_test=cat[3], status=tuple(status), start=f)
+
+
+def cusp_between(curve: FoldCurve) -> list[tuple[float, float]]:
+    """(along, vary) at each cusp passed, by linear interpolation of the cusp test."""
+    out = []
+    for i in curve.cusp_indices:
+        c0, c1 = curve.cusp_test[i], curve.cusp_test[i + 1]
+        t = c0 / (c0 - c1)
+        out.append((float(curve.along_values[i] + t * (curve.along_values[i + 1]
+                                                      - curve.along_values[i])),
+                    float(curve.values[i] + t * (curve.values[i + 1] - curve.values[i]))))
+    return out
+
+
+__all__ = ["FoldCurve", "fold_curve", "cusp_between"]

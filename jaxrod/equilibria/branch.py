@@ -1,0 +1,104 @@
+"""The equilibrium branch of any scene along any of its inputs.
+
+Pseudo-arclength continuation (``jaxrod.solvers.continuation``) of grad E(x; v) = 0 in the
+input v = ``vary`` on the scale v = start + (stop - start) lam, lam from 0 to 1, from the
+equilibrium at v = start (ramped from zero loads, or continued from a given state). The
+branch is followed round folds; it ends at either end of the range.
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.derivatives import Structured
+from jaxrod.equilibria.equilibrium import (
+    DEFAULT_N,
+    discretise,
+    mean_functional,
+    ramp,
+    solve_at,
+    tip,
+)
+from jaxrod.equilibria.record import Branch, branch_from_runs
+from jaxrod.params import ParameterError
+from jaxrod.programs import jit
+from jaxrod.scenes.scene import Input, Scene
+from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
+from jaxrod.status import Status
+
+
+def branch_options(max_points: int = 400) -> ContinuationOptions:
+    """Steps of at most 1/20 of the range; the run ends outside [0, 1] in lam."""
+    return ContinuationOptions(ds=0.01, ds_min=1e-9, ds_max=0.05, lam_min=0.0, lam_max=1.0,
+                               tol=1e-12, max_points=max_points)
+
+
+def check_range(scene: Scene, vary: str, start, stop) -> tuple[float, float]:
+    """(start, stop) as floats, after checking that ``vary`` names a scalar input."""
+    scene.check_key(vary)
+    start, stop = float(start), float(stop)
+    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
+        raise ParameterError(f"the range of {vary} must be two different finite values, got "
+                             f"{start} to {stop}")
+    return start, stop
+
+
+def _observed(scene, disc, x, lam, origin, span, vary):
+    at = scene.replace(vary, origin + span * lam)
+    angle, X = tip(at, x, disc)
+    energy = Structured(Input(vary)).energy(x, lam, (scene, disc, origin, span))
+    return mean_functional(disc)(x), angle, energy, X
+
+
+def _branch_program(scene, disc, origin, span, x0, given, opts, capacity, vary):
+    at_start = scene.replace(vary, origin)
+    x_ramp, *_ = ramp(at_start, disc)
+    model = Structured(Input(vary))
+    args = (scene, disc, origin, span)
+    start = jnp.where(given, x0, x_ramp)
+    start = solve_at(model, start, 0.0, args).x
+    run = continuation_run(model, start, 0.0, args, opts, capacity, 1.0)
+    q, angle, energy, X = jax.vmap(
+        lambda x, lam: _observed(scene, disc, x, lam, origin, span, vary))(run.x, run.lam)
+    return run, (q, angle, energy), X
+
+
+_program = jit(_branch_program, static_argnames=("capacity", "vary"))
+
+
+def branch(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
+           state=None, options: ContinuationOptions | None = None) -> Branch:
+    """The equilibria of ``scene`` as the input ``vary`` goes from ``start`` to ``stop``.
+
+    Equilibria solve grad E(x; v) = 0 (the discrete Euler-Lagrange equations); stability is
+    the Hessian's inertia (``Branch.stable``). The branch starts from the equilibrium at
+    v = start reached by ramping the loads from zero, or continued from ``state``.
+    ``Branch.value`` holds v; ``Branch.status`` says why it ended.
+    """
+    start, stop = check_range(scene, vary, start, stop)
+    disc = discretise(scene, n)
+    opts = options or branch_options()
+    given = state is not None
+    x0 = jnp.asarray(state if given else np.zeros(disc.size), jnp.float64)
+    run, observed, X = jax.device_get(_program(
+        scene, disc, start, stop - start, x0, given, opts._replace(max_points=0),
+        opts.max_points, vary))
+    # lam -> the input's value, and the tangent's lam component in the input's units
+    run = run._replace(lam=start + (stop - start) * run.lam,
+                       tangent_lam=(stop - start) * run.tangent_lam)
+    b = branch_from_runs([(run, False, observed)])
+    k = int(run.num_points)
+    return Branch(**{f: getattr(b, f) for f in ("value", "theta", "q", "tip", "energy",
+                                                 "min_eig", "morse_index", "tangent_value",
+                                                 "newton_iterations", "residual_norm",
+                                                 "status", "complete")},
+                  vary=vary, tip_position=np.asarray(X)[:k])
+
+
+def status_of(b: Branch) -> Status:
+    """The branch's ``Status`` (REACHED_BOUND when it ran through its range)."""
+    return Status.REACHED_BOUND if b.complete else Status.NOT_CONVERGED

@@ -1,0 +1,195 @@
+"""The equilibrium of a scene under its loads, reached by ramping them from zero.
+
+The ramp is pseudo-arclength continuation in the load scale t (``Scene.load_scale``) of
+
+    grad E_t(x) = 0,   E_t = E_elastic + t (E - E_elastic),   t: 0 -> 1,
+
+from the straight unloaded rod x = 0 (an equilibrium of the bending energy alone), stopped at
+the first fold; the state at t = 1 is then polished by Newton (or, if the ramp folded first,
+reached by energy descent at t = 1 from the fold: the snap). Stability is the sign of the
+Hessian's smallest eigenvalue (the discrete second variation).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.derivatives import Structured
+from jaxrod.discretise.director import director_discretisation
+from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.params import check_degree
+from jaxrod.programs import jit
+from jaxrod.scenes.scene import Input, Scene
+from jaxrod.solvers.continuation import (
+    FOLDS_FOUND,
+    REACHED_BOUND,
+    ContinuationOptions,
+    continuation_run,
+)
+from jaxrod.solvers.descent import descend
+from jaxrod.solvers.newton import newton
+from jaxrod.status import Status, check
+
+#: Default Chebyshev degree of the generic analyses (the paper's scenes converge to round-off
+#: from N = 12; 16 keeps a margin).
+DEFAULT_N = 16
+
+#: The load scale as continuation parameter.
+LOAD = Structured(Input("load_scale"))
+
+RAMP_OPTIONS = ContinuationOptions(ds=0.1, ds_min=1e-8, ds_max=0.2, lam_max=1.0, tol=1e-12,
+                                   max_folds=1, max_points=0)
+RAMP_CAPACITY = 200
+
+
+def discretise(scene: Scene, n: int):
+    """The discretisation of degree n for the scene's geometry and support."""
+    n = check_degree(n)
+    if scene.geometry == "planar":
+        return planar_discretisation(n, scene.support)
+    return director_discretisation(n, scene.support)
+
+
+def mean_functional(disc):
+    """q = int of the (first) angle: the reduced coordinate of the normal forms."""
+    if hasattr(disc, "mean"):
+        return disc.mean
+    return lambda x: disc.planar.mean(disc.split(x)[0])
+
+
+def tip(scene: Scene, x, disc):
+    """(tip angle from +z toward +x in radians, tip position X = int d3 (3-vector))."""
+    a = jnp.einsum("jrm,m->jr", disc.jet_matrix, x)
+    d3 = jax.vmap(lambda aj: scene._jet(aj)[0])(a)
+    X = d3.T @ disc.quad_weights
+    return jnp.arctan2(X[0], X[2]), X
+
+
+def _residual(x, args):
+    lam, model, margs = args
+    return model.gradient(x, lam, margs)
+
+
+def _jacobian(x, args):
+    lam, model, margs = args
+    return model.hessian(x, lam, margs)
+
+
+def solve_at(model, x0, lam, args, tol=1e-12):
+    """Newton for grad E(x, lam) = 0 from x0 (traceable)."""
+    return newton(_residual, x0, (lam, model, args), tol=tol, jacobian=_jacobian)
+
+
+def ramp(scene: Scene, disc) -> tuple:
+    """(x, converged, residual, iterations, status code) at full load (traceable)."""
+    args = (scene, disc, 0.0, 1.0)
+    x0 = jnp.zeros(disc.size, disc.quad_weights.dtype)
+    run = continuation_run(LOAD, x0, 0.0, args, RAMP_OPTIONS, RAMP_CAPACITY, 1.0,
+                           spectrum=False)
+    k = run.num_points - 1
+    snapped = run.status == FOLDS_FOUND
+    reached = run.status == REACHED_BOUND
+    j = jnp.maximum(k - 1, 0)
+    w = jnp.clip((1.0 - run.lam[j]) / (run.lam[k] - run.lam[j]), 0.0, 1.0)
+    x_mid = run.x[j] + w * (run.x[k] - run.x[j])
+    x_start = jax.lax.cond(
+        snapped, lambda x: descend(LOAD, x, args, lam=1.0).x, lambda x: x,
+        jnp.where(snapped, run.x[k], x_mid))
+    res = solve_at(LOAD, x_start, 1.0, args)
+    status = jnp.where(~res.converged, int(Status.NOT_CONVERGED),
+                       jnp.where(snapped, int(Status.SNAPPED_WHILE_LOADING),
+                                 jnp.where(reached, int(Status.SUCCESS),
+                                           int(Status.NOT_CONVERGED))))
+    return res.x, res.converged, res.residual_norm, res.iterations, status
+
+
+@dataclasses.dataclass(frozen=True)
+class Equilibrium:
+    """An equilibrium of a scene: the state and what it means.
+
+    ``tip_angle_deg`` is measured from +z toward +x; ``tip_position`` is X = int_0^1 d3 ds
+    (rod lengths); ``stable``: the Hessian's smallest eigenvalue is positive.
+    """
+
+    state: np.ndarray
+    tip_angle_deg: float
+    tip_position: np.ndarray
+    energy: float
+    smallest_eigenvalue: float
+    stable: bool
+    converged: bool
+    residual_norm: float
+    iterations: int
+    status: Status
+
+    @property
+    def message(self) -> str:
+        return self.status.message
+
+    def as_dict(self) -> dict:
+        return {"tip_angle_deg": self.tip_angle_deg,
+                "tip_position": [float(v) for v in self.tip_position], "energy": self.energy,
+                "smallest_eigenvalue": self.smallest_eigenvalue, "stable": self.stable,
+                "converged": self.converged, "residual_norm": self.residual_norm,
+                "iterations": self.iterations, "status": self.status.name.lower(),
+                "message": self.message}
+
+
+def _given(lam, args):
+    return args
+
+
+#: The scene's energy as it is (lam unused).
+FIXED = Structured(_given)
+
+
+def _report(scene, disc, x):
+    model = FIXED
+    H = model.hessian(x, 0.0, (scene, disc))
+    angle, X = tip(scene, x, disc)
+    return angle, X, model.energy(x, 0.0, (scene, disc)), jnp.linalg.eigvalsh(H)[0]
+
+
+@jit
+def _ramped(scene, disc):
+    x, conv, res, it, status = ramp(scene, disc)
+    return (x, conv, res, it, status), _report(scene, disc, x)
+
+
+@jit
+def _continued(scene, disc, x0):
+    res = solve_at(FIXED, x0, 0.0, (scene, disc))
+    status = jnp.where(res.converged, int(Status.SUCCESS), int(Status.NOT_CONVERGED))
+    return (res.x, res.converged, res.residual_norm, res.iterations, status), \
+        _report(scene, disc, res.x)
+
+
+def equilibrium(scene: Scene, n: int = DEFAULT_N, state=None, throw: bool = True) -> Equilibrium:
+    """The equilibrium of ``scene`` reached by ramping its loads from zero, or continued from
+    ``state`` (a state of the same discretisation) when given.
+
+    Solves grad E(x) = 0 (the discrete Euler-Lagrange equations of the scene's energy,
+    ``jaxrod.scenes.scene``). ``throw``: raise ``SolverError`` if it does not converge
+    (else the status says so).
+    """
+    disc = discretise(scene, n)
+    if state is None:
+        (x, conv, res, it, status), rep = jax.device_get(_ramped(scene, disc))
+    else:
+        x0 = jnp.asarray(state, jnp.float64)
+        if x0.shape != (disc.size,):
+            raise ValueError(f"state has shape {x0.shape}; this discretisation needs "
+                             f"({disc.size},)")
+        (x, conv, res, it, status), rep = jax.device_get(_continued(scene, disc, x0))
+    code = check(status, throw, "equilibrium")
+    angle, X, energy, eig = rep
+    return Equilibrium(state=np.asarray(x), tip_angle_deg=math.degrees(float(angle)),
+                       tip_position=np.asarray(X), energy=float(energy),
+                       smallest_eigenvalue=float(eig), stable=bool(eig > 0),
+                       converged=bool(conv), residual_norm=float(res), iterations=int(it),
+                       status=code)

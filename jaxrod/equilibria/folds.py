@@ -1,0 +1,128 @@
+"""Folds of any scene along any input: detected on the branch, refined by Moore-Spence.
+
+A fold (saddle-node) of grad E(x; v) = 0 is where the branch turns back in v: the Hessian
+H has a one-dimensional kernel phi and dv/ds changes sign. Each is refined by the
+Moore-Spence system [grad E; H phi; l . phi - 1] = 0 (``jaxrod.solvers.folds``) in the input's
+scaled coordinate, and reported with its normal form: with phi normalised to int phi = 1
+(q = int theta the reduced coordinate),
+
+    dF/dv = phi . d(grad E)/dv,   d2F/dq2 = D^3E[phi, phi, phi],
+    v - v* ~ c (q - q*)^2,   c = -d2F/dq2 / (2 dF/dv)
+
+(the paper's Proposition "Planar saddle-node bifurcation", for any scene and input).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.derivatives import Structured
+from jaxrod.equilibria.branch import branch, check_range
+from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
+from jaxrod.equilibria.record import Branch
+from jaxrod.programs import jit
+from jaxrod.scenes.scene import Input, Scene
+from jaxrod.solvers.folds import coefficients_at_fold, moore_spence_solve
+from jaxrod.status import SolverError, Status
+
+
+@dataclasses.dataclass(frozen=True)
+class Fold:
+    """A fold of a scene's branch in the input ``vary``, refined by Moore-Spence.
+
+    ``value``: the input at the fold; ``tip_angle_deg`` from +z toward +x; ``dF_dvalue``,
+    ``d2F_dq2``, ``normal_form_c``: the normal form (module docstring) in the input's units.
+    """
+
+    vary: str
+    value: float
+    tip_angle_deg: float
+    tip_position: np.ndarray
+    q: float
+    dF_dvalue: float
+    d2F_dq2: float
+    normal_form_c: float
+    state: np.ndarray
+    null_vector: np.ndarray
+    converged: bool
+    residual_norm: float
+    iterations: int
+    status: Status
+
+    def as_dict(self) -> dict:
+        return {"value": self.value, "tip_angle_deg": self.tip_angle_deg,
+                "tip_position": [float(v) for v in self.tip_position], "q": self.q,
+                "dF_dvalue": self.dF_dvalue, "d2F_dq2": self.d2F_dq2,
+                "normal_form_c": self.normal_form_c, "converged": self.converged,
+                "residual_norm": self.residual_norm, "iterations": self.iterations}
+
+
+def _refine_one(x0, lam0, scene, disc, origin, span, vary):
+    model = Structured(Input(vary))
+    args = (scene, disc, origin, span)
+    phi0 = jnp.linalg.eigh(model.hessian(x0, lam0, args))[1][:, 0]
+    fp = moore_spence_solve(model, x0, lam0, phi0, args)
+    d_lam, d_qq, phi_q = coefficients_at_fold(fp.newton.jacobian, fp.null_vector,
+                                              mean_functional(disc))
+    angle, X = tip(scene.replace(vary, origin + span * fp.lam), fp.x, disc)
+    return fp, (d_lam / span, d_qq, mean_functional(disc)(fp.x), angle, X, phi_q)
+
+
+_refine = jit(jax.vmap(_refine_one, in_axes=(0, 0, None, None, None, None, None)),
+              static_argnames=("vary",))
+
+
+def refine(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Fold]:
+    """The folds detected on the branch ``b`` of ``scene``, refined (in the order met)."""
+    idx = b.fold_indices
+    if len(idx) == 0:
+        return []
+    disc = discretise(scene, n)
+    origin = float(b.value[0])
+    # start from the point of the pair with the smaller |dv/ds| (nearer the fold)
+    pick = np.where(np.abs(b.tangent_value[idx]) <= np.abs(b.tangent_value[idx + 1]), idx,
+                    idx + 1)
+    span = _span(b)
+    lam0 = (b.value[pick] - origin) / span
+    fp, rep = jax.device_get(_refine(jnp.asarray(b.theta[pick]), jnp.asarray(lam0), scene,
+                                     disc, origin, span, b.vary))
+    folds = []
+    for i in range(len(pick)):
+        d_v, d_qq, q, angle, X, phi = (np.asarray(r[i]) for r in rep)
+        conv = bool(fp.newton.converged[i])
+        folds.append(Fold(
+            vary=b.vary, value=float(origin + span * fp.lam[i]),
+            tip_angle_deg=math.degrees(float(angle)), tip_position=X, q=float(q),
+            dF_dvalue=float(d_v), d2F_dq2=float(d_qq), normal_form_c=float(-d_qq / (2 * d_v)),
+            state=np.asarray(fp.x[i]), null_vector=phi, converged=conv,
+            residual_norm=float(fp.newton.residual_norm[i]),
+            iterations=int(fp.newton.iterations[i]),
+            status=Status.SUCCESS if conv else Status.NOT_CONVERGED))
+    return folds
+
+
+def _span(b: Branch) -> float:
+    """The scale of the branch's input (its range), so that lam stays O(1)."""
+    span = float(np.nanmax(b.value) - np.nanmin(b.value))
+    return span if span > 0 else 1.0
+
+
+def folds(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
+          state=None, throw: bool = True) -> list[Fold]:
+    """The folds met along the branch of ``scene`` as ``vary`` goes from ``start`` to
+    ``stop`` (in the order met), each refined by Moore-Spence with its normal form.
+
+    ``throw``: raise ``SolverError`` if a fold's refinement does not converge.
+    """
+    start, stop = check_range(scene, vary, start, stop)
+    found = refine(scene, branch(scene, vary, start, stop, n, state), n)
+    if throw:
+        for f in found:
+            if not f.converged:
+                raise SolverError(f.status, f"the fold near {vary} = {f.value:.6g}")
+    return found

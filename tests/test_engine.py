@@ -1,0 +1,220 @@
+"""The engine: scenes composed from terms, derivatives assembled from their structure, and the
+generic analyses (equilibrium, branch, folds, fold curve, map) over any scene and input.
+
+References: plain autodiff of the whole energy (derivatives), the paper's scenes as written
+before the terms existed (energies), ``jr.folds`` and ``jr.fold_pairs`` (the paper's diagram
+and fast path), a Moore-Spence solve on the autodiff energy (a new term's folds).
+"""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from tip_spring import TipSpring
+
+import jaxrod as jr
+from jaxrod.derivatives import Autodiff, Structured
+from jaxrod.discretise.director import director_discretisation
+from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
+from jaxrod.scenes.scene import Input, Scene, SceneError
+from jaxrod.scenes.terms import TERMS, Anisotropy, Bending, Dipole, Gravity, term
+from jaxrod.scenes.three_d import DipoleMagnet3D, UniformField3D, magnet_position
+from jaxrod.scenes.uniform import UniformField
+from jaxrod.solvers.folds import moore_spence_solve
+from jaxrod.status import SolverError, Status
+
+G, M, D = 2.2, 0.0236, 1.2
+N = 12
+
+
+def paper_scene(geometry="planar", alpha=0.0, beta=0.0, **extra):
+    return Scene({"bending": Bending(), "gravity": Gravity(G), "magnet": Dipole(M, D, alpha,
+                                                                                beta),
+                  **extra}, geometry=geometry)
+
+
+def spring_scene(k=0.05):
+    return paper_scene(spring=TipSpring(k, jnp.array([0.0, 0.0, 1.0])))
+
+
+@term("gravity_as_distributed")
+class _DistributedGravity:
+    """Gravity written through the positions, G int_0^1 r(s) . e3 ds: the same energy as
+    ``Gravity`` (by parts), as a distributed term (autodiff as a whole)."""
+
+    G: float
+
+    def distributed(self, r, d3, s, w):
+        return self.G * jnp.dot(w, r[:, 2])
+
+
+def _state(size, scale=0.3):
+    return scale * jnp.sin(0.7 * jnp.arange(size) + 0.2)
+
+
+def _whole(scene_at):
+    return Autodiff(lambda x, lam, args: scene_at(lam, args)[0].energy(x, args[1]))
+
+
+@pytest.mark.parametrize("geometry", ["planar", "3d"])
+@pytest.mark.parametrize("extra", ["none", "spring", "distributed", "anisotropy"])
+def test_assembled_derivatives_equal_autodiff_of_the_whole_energy(geometry, extra):
+    terms = {"none": {}, "spring": {"spring": TipSpring(0.3, jnp.array([0.1, 0.0, 0.9]))},
+             "distributed": {"lifted": _DistributedGravity(0.7)},
+             "anisotropy": {"aniso": Anisotropy(1.3, jnp.array([0.6, 0.0, 0.8]))}}[extra]
+    scene = paper_scene(geometry, 0.4, 0.3 if geometry == "3d" else 0.0, **terms)
+    disc = planar_discretisation(N) if geometry == "planar" else director_discretisation(N)
+    x = _state(disc.size)
+    model = Structured(Input("magnet.alpha"))
+    ref = _whole(model.scene_at)
+    args, lam = (scene, disc, 0.1, 0.8), 0.5
+    for name in ("energy", "gradient", "hessian", "gradient_lam"):
+        a, b = getattr(model, name)(x, lam, args), getattr(ref, name)(x, lam, args)
+        assert np.max(np.abs(a - b)) <= 1e-12 * (1 + np.max(np.abs(b))), name
+    phi = _state(disc.size, 1.0)
+    a, b = model.third(x, lam, args, phi), ref.third(x, lam, args, phi)
+    assert np.max(np.abs(a - b)) <= 1e-11 * (1 + np.max(np.abs(b)))
+
+
+def test_a_distributed_term_equals_its_endpoint_form():
+    disc = planar_discretisation(N)
+    x = _state(disc.size)
+    by_parts = paper_scene()
+    distributed = Scene({"bending": Bending(), "lifted": _DistributedGravity(G),
+                         "magnet": Dipole(M, D)})
+    model = Structured(lambda lam, args: args)
+    for name in ("energy", "gradient", "hessian"):
+        a = getattr(model, name)(x, 0.0, (by_parts, disc))
+        b = getattr(model, name)(x, 0.0, (distributed, disc))
+        # int_0^1 r . e3 = int (1 - s) d3 . e3 (spectrally exact on the quadrature grid)
+        assert np.max(np.abs(a - b)) <= 1e-12 * (1 + np.max(np.abs(a))), name
+
+
+def test_the_papers_scenes_are_instances_of_the_terms():
+    disc = planar_discretisation(N)
+    x = _state(disc.size)
+    model = Structured(Input("magnet.alpha"))
+    for alpha in (0.0, 0.7):
+        a = model.hessian(x, alpha, (paper_scene(), disc, 0.0, 1.0))
+        b = ALPHA_MODEL.hessian(x, alpha, (DipoleMagnet(G, M, D, 0.0), disc))
+        assert np.max(np.abs(a - b)) <= 1e-13 * np.max(np.abs(b))
+        assert abs(model.energy(x, alpha, (paper_scene(), disc, 0.0, 1.0))
+                   - DipoleMagnet(G, M, D, alpha).energy(x, disc)) <= 1e-14
+    uniform = Scene({"bending": Bending(), "gravity": Gravity(G), "field": Anisotropy(3.0)})
+    fixed = Structured(lambda lam, args: args)
+    assert np.allclose(fixed.hessian(x, 0.0, (uniform, disc)),
+                       fixed.hessian(x, 0.0, (UniformField(G, 3.0), disc)), rtol=0, atol=1e-12)
+    d3 = director_discretisation(N)
+    y = _state(d3.size, 0.2)
+    for scene, old in ((paper_scene("3d", 0.5, 0.2),
+                        DipoleMagnet3D(G, M, D, magnet_position(0.5, 0.2))),
+                       (Scene({"bending": Bending(), "gravity": Gravity(G),
+                               "field": Anisotropy(3.0)}, geometry="3d"),
+                        UniformField3D(G, 3.0))):
+        assert abs(fixed.energy(y, 0.0, (scene, d3)) - old.energy(y, d3)) <= 1e-14
+        assert np.allclose(fixed.hessian(y, 0.0, (scene, d3)),
+                           fixed.hessian(y, 0.0, (old, d3)), rtol=0, atol=1e-12)
+
+
+def test_inputs_by_name():
+    scene = spring_scene()
+    assert scene.inputs() == ["gravity.G", "gravity.direction.0", "gravity.direction.1",
+                              "gravity.direction.2", "magnet.M", "magnet.D", "magnet.alpha",
+                              "magnet.beta", "spring.k", "spring.anchor.0", "spring.anchor.1",
+                              "spring.anchor.2"]
+    assert float(scene.replace("spring.anchor.2", 0.5).value("spring.anchor.2")) == 0.5
+    assert float(scene.replace("magnet.D", 1.3).value("magnet.D")) == 1.3
+    with pytest.raises(SceneError, match="did you mean magnet.alpha"):
+        scene.replace("magnet.alhpa", 1.0)
+    with pytest.raises(SceneError, match="not a scalar input"):
+        scene.check_key("spring.anchor")
+    with pytest.raises(SceneError, match="geometry"):
+        Scene({"bending": Bending()}, geometry="2d")
+    assert {"bending", "gravity", "anisotropy", "dipole", "tip_spring"} <= set(TERMS)
+
+
+def test_the_generic_folds_of_the_papers_scene_agree_with_its_diagram_and_fast_path():
+    found = jr.folds(jr.magnet_scene(G, M, D), n=16).folds
+    generic = jr.scene_folds(paper_scene(), "magnet.alpha", 0.0, math.pi / 2, n=16)
+    # met in order along the branch: the upper fold first, then the lower one
+    assert [round(math.degrees(f.value), 9) for f in generic][::-1] == \
+        [round(f.alpha_deg, 9) for f in found]
+    for f, ref in zip(generic[::-1], found):
+        assert abs(math.degrees(f.value) - ref.alpha_deg) <= 1e-10
+        assert abs(f.tip_angle_deg - ref.tip_deg) <= 1e-9
+        assert abs(math.degrees(1.0) * f.normal_form_c - ref.normal_form_c) <= 1e-6 \
+            * abs(ref.normal_form_c) or abs(f.normal_form_c - ref.normal_form_c) <= 1e-6 \
+            * abs(ref.normal_form_c)
+    fast = jr.fold_pairs(np.array([G]), np.array([M]), np.array([D]), n=16)
+    assert np.allclose(sorted(math.degrees(f.value) for f in generic), fast.alpha_deg[0],
+                       rtol=0, atol=1e-9)
+
+
+def test_a_new_term_runs_through_branch_folds_fold_curve_and_map():
+    scene = spring_scene(0.05)
+    b = jr.branch(scene, "magnet.alpha", 0.0, math.pi / 2, n=N)
+    assert b.complete and b.vary == "magnet.alpha" and len(b.fold_indices) == 2
+    folds = jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=N)
+    assert len(folds) == 2 and all(f.converged for f in folds)
+    # independent derivatives: Moore-Spence on the autodiff of the whole energy
+    disc = planar_discretisation(N)
+    model = _whole(Input("magnet.alpha"))
+    for f in folds:
+        args = (scene, disc, 0.0, 1.0)
+        ref = moore_spence_solve(model, jnp.asarray(f.state), f.value,
+                                 jnp.asarray(f.null_vector), args)
+        assert bool(ref.newton.converged) and abs(float(ref.lam) - f.value) <= 1e-11
+    # the spring holds the rod up: both folds move towards the vertical, continuously in k
+    weak = jr.scene_folds(spring_scene(1e-6), "magnet.alpha", 0.0, math.pi / 2, n=N)
+    bare = jr.scene_folds(paper_scene(), "magnet.alpha", 0.0, math.pi / 2, n=N)
+    assert all(abs(a.value - b.value) <= 1e-5 for a, b in zip(weak, bare))
+    assert folds[0].value < bare[0].value and folds[1].value < bare[1].value
+    curve = jr.fold_curve(scene, "magnet.alpha", (0.0, math.pi / 2), "spring.k", (0.0, 0.3),
+                          n=N)
+    assert curve.along_values.min() <= 0.0 and curve.along_values.max() >= 0.3
+    at = np.interp(0.05, curve.along_values, curve.values)
+    assert abs(at - folds[0].value) <= 1e-4  # the curve passes through its starting fold
+    k = 0.2
+    on_curve = np.interp(k, curve.along_values, curve.values)
+    direct = jr.scene_folds(spring_scene(k), "magnet.alpha", 0.0, math.pi / 2, n=N)[0].value
+    assert abs(on_curve - direct) <= 1e-4
+    fmap = jr.fold_map(scene, "magnet.alpha", (0.0, math.pi / 2),
+                       ("spring.k", np.array([0.0, 0.2])), ("magnet.D", np.array([1.2, 1.3])),
+                       n=N, progress=False)
+    assert np.all(fmap.status == int(Status.SUCCESS))
+    assert fmap.count[0, 0] == 2 and abs(fmap.first[0, 0] - bare[0].value) <= 1e-10
+    assert abs(fmap.first[0, 1] - direct) <= 1e-10
+
+
+def test_the_equilibrium_is_the_one_reached_by_ramping_the_loads():
+    at_zero = jr.equilibrium(paper_scene(), n=N)
+    assert at_zero.status is Status.SUCCESS and abs(at_zero.tip_angle_deg) <= 1e-12
+    assert at_zero.stable
+    # a magnet at 60 degrees: the ramp pulls the rod away from the vertical, continuously
+    e = jr.equilibrium(paper_scene(alpha=math.radians(60)), n=N)
+    assert e.converged and e.stable and e.tip_angle_deg > 0
+    again = jr.equilibrium(paper_scene(alpha=math.radians(60)), n=N, state=e.state)
+    assert abs(again.tip_angle_deg - e.tip_angle_deg) <= 1e-12
+    d = e.as_dict()
+    assert set(d) >= {"tip_angle_deg", "tip_position", "stable", "converged"}
+
+
+def test_bad_requests_are_named():
+    with pytest.raises(jr.ParameterError, match="two different finite values"):
+        jr.branch(paper_scene(), "magnet.alpha", 0.3, 0.3)
+    with pytest.raises(SceneError, match="not an input"):
+        jr.scene_folds(paper_scene(), "magnet.angle", 0.0, 1.0)
+    with pytest.raises(jr.ParameterError, match="fold"):
+        jr.fold_curve(paper_scene(), "magnet.alpha", (0.0, 0.2), "magnet.D", (1.1, 1.3), n=N)
+    with pytest.raises(ValueError, match="shape"):
+        jr.equilibrium(paper_scene(), n=N, state=np.zeros(3))
+    with pytest.raises(SolverError):
+        from jaxrod.status import check
+
+        check(int(Status.STEP_TOO_SMALL), throw=True)
+    assert not Status.NOT_CONVERGED.ok and Status.REACHED_BOUND.ok
+    assert all(s.message for s in Status)
+    jax.clear_caches()
