@@ -4,11 +4,11 @@
 remanence drawn from its prior N(8e5, 4e4) A/m, the track's offset uniform in +-2 degrees;
 the four switching angles are the folds at the hidden parameters (``fold_pairs``: one-mode
 brackets and Moore-Spence, vmapped) plus Gaussian noise of 0.5 degrees. Each is fitted with
-(E, remanence, offset) free and the remanence's prior (``jaxrod.analysis.fit.fit``). Prints
+(E, remanence, offset) free and the remanence's prior (``jaxrod.inverse.fit.fit``). Prints
 the fraction of 68% intervals (estimate +- one Laplace standard deviation) that cover the
 truth, per parameter, and the mean of (estimate - truth) / std with its standard error
 (unbiased within it), then the warm time of one fit with three free parameters and of one
-design (``jaxrod.analysis.design``), and the compile time of the first call.
+design (``jaxrod.inverse.design``), and the compile time of the first call.
 
 Run:  python benchmarks/calibration.py [--quick]     (quick: 40 experiments)
 Writes benchmarks/results/calibration.json and .md.
@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import jaxrod as jr
-from jaxrod.analysis.fold_curves import groups_of
+from jaxrod.design_point import groups_of
 
 HERE = Path(__file__).resolve().parent
 NOISE_DEG = 0.5

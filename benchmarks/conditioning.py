@@ -1,5 +1,5 @@
 """Conditioning of the full, bordered, Moore-Spence, mean-zero and reduced systems as the
-folds of the paper's two experiments are approached (jaxrod.analysis.conditioning).
+folds of the paper's two experiments are approached (jaxrod.magnet.conditioning).
 
 The paper claims the full Newton solve is ill-conditioned near a fold and the reduced one is
 not; this measures both, and where Moore-Spence and the pseudo-arclength corrector stand.

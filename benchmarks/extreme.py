@@ -107,7 +107,7 @@ def reduced_route(scene, folds) -> dict:
     """The reduced route at the same scene: agreement with Moore-Spence, K at each fold."""
     import numpy as np
 
-    from jaxrod.analysis.contraction import contraction_constants
+    from jaxrod.magnet.contraction import contraction_constants
 
     try:
         red_folds = jr.reduced_folds(scene, n=32)

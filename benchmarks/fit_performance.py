@@ -25,7 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxrod as jr
-from jaxrod.analysis import fit
+from jaxrod.inverse import youngs as fit_youngs
 from jaxrod.programs import jit  # as jaxrod compiles its own programs
 
 HERE = Path(__file__).resolve().parent
@@ -35,8 +35,8 @@ def synthetic(K: int, seed: int = 0):
     rng = np.random.default_rng(seed)
     E_true = rng.uniform(80e9, 250e9, K)
     offsets = rng.uniform(-2.0, 2.0, K)
-    setup = fit.setup_from_preset()
-    model = jit(jax.vmap(lambda p: fit.model_angles(p, setup)[0]))
+    setup = fit_youngs.setup_from_preset()
+    model = jit(jax.vmap(lambda p: fit_youngs.model_angles(p, setup)[0]))
     angles = np.asarray(model(jnp.stack([jnp.log(E_true), jnp.asarray(offsets)], axis=1)))
     return E_true, angles + 0.5 * rng.normal(size=angles.shape)
 

@@ -46,7 +46,7 @@ import jax.numpy as jnp  # noqa: E402
 from common import RESULTS, write_results  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
-from jaxrod.analysis import fold_curves as fc  # noqa: E402
+from jaxrod.bistability import fold_curves as fc  # noqa: E402
 
 G0, M0, D0 = 2.2, 0.0236, 11.25 / 9.2
 LOW_END = 1.015
@@ -293,7 +293,7 @@ import json, math, sys, time
 import jax, jax.numpy as jnp
 import jaxrod
 import jaxcont as jc
-from jaxrod.analysis.magnet import locate_folds
+from jaxrod.magnet.folds import locate_folds
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 G, M, D0 = {G!r}, {M!r}, {D!r}

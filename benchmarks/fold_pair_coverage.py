@@ -39,8 +39,8 @@ import numpy as np
 from common import benchmark_main, write_results
 
 import jaxrod as jr
-from jaxrod.analysis.batch import NOT_CONVERGED, fold_pairs_program
-from jaxrod.analysis.fold_curves import groups_of
+from jaxrod.design_point import groups_of
+from jaxrod.magnet.batch import NOT_CONVERGED, fold_pairs_program
 from jaxrod.params import NDFEB_MAGNET
 
 N = 12
@@ -117,7 +117,7 @@ def previous_release():
     not there."""
     try:
         text = subprocess.run(["git", "-C", str(REPO), "show",
-                               f"{PREVIOUS}:jaxrod/analysis/batch.py"], capture_output=True,
+                               f"{PREVIOUS}:jaxrod/magnet/batch.py"], capture_output=True,
                               text=True, check=True, timeout=60).stdout
     except (OSError, subprocess.SubprocessError):
         return None

@@ -37,8 +37,8 @@ import numpy as np  # noqa: E402
 from common import benchmark_main  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
-from jaxrod.analysis.greenhill import pitchfork_coefficients  # noqa: E402
 from jaxrod.programs import jit  # noqa: E402  (as jaxrod compiles its own programs)
+from jaxrod.uniform.greenhill import pitchfork_coefficients  # noqa: E402
 
 
 def _time(fn, *args, repeat=20):

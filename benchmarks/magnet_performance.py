@@ -40,7 +40,8 @@ import shooting_reference as shooting  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
 from jaxrod import spectral  # noqa: E402
-from jaxrod.analysis import magnet  # noqa: E402
+from jaxrod.magnet import diagram as magnet  # noqa: E402
+from jaxrod.magnet import folds as magnet_folds  # noqa: E402
 
 D_EXP = 11.25 / 9.2
 CASES = {200: (2.2, 0.0236), 100: (4.4, 0.0472)}
@@ -109,7 +110,7 @@ def timings(n: int, repeat: int) -> dict:
         th0 = jnp.asarray(branch.theta[starts])
         al0 = jnp.asarray(branch.alpha[starts])
         (fp, _), pair_first, pair_warm = timed(
-            lambda: magnet._refine_batch(th0, al0, scene, disc, 1e-13), repeat)
+            lambda: magnet_folds._refine_batch(th0, al0, scene, disc, 1e-13), repeat)
         pair = sorted(np.degrees(np.asarray(fp.lam)))
         ref = shooting_folds(G, M, jr.folds(scene, n=n).folds, n)
         err = max(abs(a - r) for a, r in zip(pair, ref))

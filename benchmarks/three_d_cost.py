@@ -27,7 +27,7 @@ import numpy as np
 from common import benchmark_main, write_results
 
 import jaxrod as jr
-from jaxrod.analysis import magnet
+from jaxrod.magnet import diagram as magnet
 from jaxrod.programs import jit  # as jaxrod compiles its own programs
 
 D_EXP = 11.25 / 9.2

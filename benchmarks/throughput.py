@@ -26,7 +26,7 @@ import jax
 import numpy as np
 
 import jaxrod as jr
-from jaxrod.analysis.batch import fold_pairs_program
+from jaxrod.magnet.batch import fold_pairs_program
 from jaxrod.programs import jit  # as jaxrod compiles its own programs
 
 HERE = Path(__file__).resolve().parent
@@ -112,7 +112,7 @@ def reference_for(K: int) -> np.ndarray:
 def markdown(res: dict) -> str:
     lines = [f"# Fold-pair throughput on {res['device']}", "",
              "E uniform in 80-250 GPa (paper's wire, D = 11.25/9.2), N = 12; "
-             "`jaxrod.analysis.batch.fold_pairs` (one-mode bracketing + Moore-Spence, vmapped).",
+             "`jaxrod.magnet.batch.fold_pairs` (one-mode bracketing + Moore-Spence, vmapped).",
              "", "| dtype | K | pairs/s | warm s | compile + first s | converged | "
              "max error vs float64 (deg) | bytes per set |", "|---|---|---|---|---|---|---|---|"]
     for r in res["rows"]:

@@ -45,7 +45,7 @@ def _write_api() -> None:
     (GENERATED / "api").mkdir(parents=True, exist_ok=True)
     index = ["API reference", "=============", "",
              "Everything below is importable from the top level: ``import jaxrod as jr``, "
-             "then ``jr.<name>``. Deep imports (``jaxrod.analysis.magnet``, ...) keep "
+             "then ``jr.<name>``. Deep imports (``jaxrod.magnet.diagram``, ...) keep "
              "working but are not the interface.", "", ".. toctree::", "   :maxdepth: 1", ""]
     for k, (section, names) in enumerate(jaxrod.API.items()):
         page = f"section_{k:02d}"

@@ -403,7 +403,7 @@ def check_groups(G=None, A=None, M=None, D=None) -> None:
 
 
 #: The permanent-magnet scene's inputs: its groups, and the physical inputs in the order of
-#: ``jaxrod.analysis.fold_curves.DesignPoint.values``, with their units.
+#: ``jaxrod.design_point.DesignPoint.values``, with their units.
 GROUP_NAMES = ("G", "M", "D")
 PHYSICAL_NAMES = ("E", "density", "gravity", "diameter", "length", "rod-magnetisation",
                   "remanence", "magnet-diameter", "track-radius")

@@ -12,7 +12,7 @@ if not matplotlib.get_backend().lower().startswith("module://"):  # keep noteboo
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from jaxrod.analysis.greenhill import greenhill_load, paper_bounds, stability_curve  # noqa: E402
+from jaxrod.uniform.greenhill import greenhill_load, paper_bounds, stability_curve  # noqa: E402
 
 
 def stability_diagram_figure(report: dict | None = None, G_range=(1e-2, 1e3), points: int = 200):
@@ -109,7 +109,7 @@ def diagram_figure(report):
     """Tip angle and q against alpha for a ``FoldReport``: stable solid, unstable dashed,
     the Moore-Spence folds circled (both signs of alpha), G, M, D in the title.
 
-    For smooth curves trace the diagram with ``jaxrod.analysis.magnet.figure_options``
+    For smooth curves trace the diagram with ``jaxrod.magnet.diagram.figure_options``
     (as ``jaxrod branch`` does); each piece ends exactly at its refined fold.
     """
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.6))

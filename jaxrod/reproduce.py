@@ -11,14 +11,14 @@ from __future__ import annotations
 
 import math
 
-from jaxrod.analysis.greenhill import (
+from jaxrod.params import NICKEL_E_RANGE, preset
+from jaxrod.uniform.greenhill import (
     AIRY_A1_PRIME,
     critical_length,
     criticality_switch_load,
     greenhill,
     greenhill_load,
 )
-from jaxrod.params import NICKEL_E_RANGE, preset
 
 #: The paper's printed Greenhill load (Lemma "Greenhill stability threshold").
 PAPER_G_CRIT = "7.8373"
@@ -233,9 +233,11 @@ EXPERIMENT_D = 11.25 / 9.2
 
 def permanent_magnet_report(n: int | None = None) -> dict:
     """Folds, widths and the hysteresis loop at the experiment's parameters."""
-    from jaxrod.analysis.magnet import DEFAULT_N, hysteresis_sweep, locate_folds, make_scene
-    from jaxrod.analysis.outofplane import branch_verdict
+    from jaxrod.magnet.diagram import DEFAULT_N, make_scene
+    from jaxrod.magnet.folds import locate_folds
+    from jaxrod.magnet.sweep import hysteresis_sweep
     from jaxrod.params import NDFEB_MAGNET
+    from jaxrod.three_d.outofplane import branch_verdict
 
     n = n or DEFAULT_N
     cases = []
@@ -272,8 +274,8 @@ def permanent_magnet_report(n: int | None = None) -> dict:
 def reduced_route_report(cases: list[dict], n: int) -> list[dict]:
     """The Lyapunov-Schmidt route at the paper's rounded (G, M): one-mode and reduced folds
     against the printed q0, alpha0 and the Moore-Spence folds, and the contraction verdicts."""
-    from jaxrod.analysis.contraction import certify
-    from jaxrod.analysis.magnet import make_scene
+    from jaxrod.magnet.contraction import certify
+    from jaxrod.magnet.diagram import make_scene
 
     rows = []
     for c in cases:
@@ -353,7 +355,7 @@ PAPER_MEASURED_ANGLES = (-25.0, 38.0, 24.0, -42.0)
 
 def youngs_modulus_report(sigma_deg: float = 1.0) -> dict:
     """Fits of E to the paper's measured angles, without and with an offset."""
-    from jaxrod.analysis.fit import fit_youngs_modulus
+    from jaxrod.inverse.youngs import fit_youngs_modulus
 
     return {"measured_deg": list(PAPER_MEASURED_ANGLES), "sigma_deg": sigma_deg,
             "fits": {name: dict(fit_youngs_modulus(PAPER_MEASURED_ANGLES, sigma_deg, off))
@@ -371,7 +373,7 @@ def richer_models(sigma_deg: float = 1.0) -> list:
     """The paper's angles fitted with (E, offset), (E, remanence, offset) and (E, track
     radius, offset), the extra inputs under ``RICHER_PRIORS``: chi^2 per degree of freedom,
     and what each says about E."""
-    from jaxrod.analysis.fit import Prior, fit
+    from jaxrod.inverse.fit import Prior, fit
 
     out = []
     for free in (("E", "offset"), ("E", "remanence", "offset"),

@@ -23,12 +23,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from jaxrod.analysis import magnet
-from jaxrod.analysis.batch import fold_pairs
-from jaxrod.analysis.fit import FitSetup, fit_youngs_modulus
-from jaxrod.analysis.greenhill import greenhill
 from jaxrod.cli import build_parser, main
+from jaxrod.inverse.youngs import FitSetup, fit_youngs_modulus
+from jaxrod.magnet import diagram as magnet
+from jaxrod.magnet import folds as magnet_folds
+from jaxrod.magnet import sweep as magnet_sweep
+from jaxrod.magnet.batch import fold_pairs
 from jaxrod.params import NICKEL, RANGES, Magnet, ParameterError, Rod, preset
+from jaxrod.uniform.greenhill import greenhill
 
 SECONDS = 10  # per case
 MEMORY_GROWTH_MB = 300  # of the peak resident memory, per case
@@ -217,8 +219,8 @@ def test_physical_inputs_are_refused_or_computable(E, diameter, length, capsys, 
         reached.append((G, A))
         raise ParameterError("reached the solver")
 
-    monkeypatch.setattr("jaxrod.analysis.greenhill.greenhill", solver)
-    monkeypatch.setattr("jaxrod.analysis.greenhill.critical_length", lambda *a, **k: 1.0)
+    monkeypatch.setattr("jaxrod.uniform.greenhill.greenhill", solver)
+    monkeypatch.setattr("jaxrod.uniform.greenhill.critical_length", lambda *a, **k: 1.0)
     argv = ["greenhill", "--E", repr(E), "--diameter", repr(diameter), "--length",
             repr(length)]
     line = refused(argv, capsys)
@@ -237,12 +239,12 @@ API = [
     (lambda: fold_pairs([2.2], [0.0236], [1.2228], dtype="foo"), "dtype"),
     (lambda: fold_pairs([2.2, math.nan], [0.0236] * 2, [1.2228] * 2), "row 1"),
     (lambda: fold_pairs([2.2], [0.0236], [0.9]), "D (track radius"),
-    (lambda: magnet.fold_angles(-2.2, 0.0236, 1.2228), "G (gravity group)"),
-    (lambda: magnet.fold_angles(2.2, 0.0236, 1.2228, n=500), "N (Chebyshev degree)"),
+    (lambda: magnet_folds.fold_angles(-2.2, 0.0236, 1.2228), "G (gravity group)"),
+    (lambda: magnet_folds.fold_angles(2.2, 0.0236, 1.2228, n=500), "N (Chebyshev degree)"),
     (lambda: magnet.make_scene(2.2, 0.0236, 1.05, 0.1), "tip cannot touch"),
-    (lambda: magnet.hysteresis_sweep(magnet.make_scene(2.2, 0.0236, 1.2228),
+    (lambda: magnet_sweep.hysteresis_sweep(magnet.make_scene(2.2, 0.0236, 1.2228),
                                      alpha_max_deg=math.nan), "alpha-max"),
-    (lambda: magnet.locate_folds(magnet.make_scene(2.2, 0.0236, 1.2228), n=200), "N"),
+    (lambda: magnet_folds.locate_folds(magnet.make_scene(2.2, 0.0236, 1.2228), n=200), "N"),
     (lambda: FitSetup(2.2, 0.0236, 0.9, 2e11), "D (track radius"),
     (lambda: fit_youngs_modulus([-28, 25, 27.5, -38.5], E0=-1.0), "E (Young's modulus)"),
     (lambda: fit_youngs_modulus([-28, math.inf, 27.5, -38.5]), "angles"),
@@ -265,7 +267,7 @@ def test_rod_stores_floats():
 
 def test_traced_out_of_range_is_nan_not_converged():
     """Inside a program nothing can raise: out-of-range groups give NaN, not converged."""
-    alphas, converged = jax.jit(lambda g: magnet.fold_angles(g, 0.0236, 1.2228))(-2.2)
+    alphas, converged = jax.jit(lambda g: magnet_folds.fold_angles(g, 0.0236, 1.2228))(-2.2)
     assert not bool(converged) and np.all(np.isnan(np.asarray(alphas)))
 
 

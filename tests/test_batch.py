@@ -4,8 +4,9 @@ import sys
 
 import numpy as np
 
-from jaxrod.analysis import magnet
-from jaxrod.analysis.batch import (
+from jaxrod.magnet import diagram as magnet
+from jaxrod.magnet import folds as magnet_folds
+from jaxrod.magnet.batch import (
     BISTABLE,
     FOLD_BEYOND_90,
     NOT_BISTABLE,
@@ -19,7 +20,7 @@ D = 11.25 / 9.2
 
 
 def _reference(G, M, Di, n=16):
-    return [f.alpha_deg for f in magnet.locate_folds(magnet.make_scene(G, M, Di), n=n).folds]
+    return [f.alpha_deg for f in magnet_folds.locate_folds(magnet.make_scene(G, M, Di), n=n).folds]
 
 
 def test_fold_pairs_agree_with_the_continuation_route_and_say_why_a_pair_is_missing():
@@ -71,7 +72,7 @@ def test_no_bistable_set_is_reported_without_its_folds():
 def test_tier_one_alone_reports_not_converged_never_not_bistable():
     """The compiled fast path without its fallback: a miss is 'not converged', and
     ``fold_pairs`` then finds the pair (status BISTABLE) from the same inputs."""
-    from jaxrod.analysis.batch import fold_pairs_program
+    from jaxrod.magnet.batch import fold_pairs_program
 
     Ds = np.array([1.0504, 1.0575])
     alphas, converged, _ = fold_pairs_program(np.full(2, 2.2), np.full(2, 0.0236), Ds)
@@ -94,7 +95,7 @@ def test_a_set_without_folds_is_nan_and_certified_not_bistable():
     """M = 0.001 is far past the cusp (no hysteresis; ``locate_folds`` finds no fold): the
     row is NaN with status NOT_BISTABLE, never a plausible angle; its neighbour is
     unaffected."""
-    assert magnet.locate_folds(magnet.make_scene(2.2, 0.001, 1.2228)).folds == []
+    assert magnet_folds.locate_folds(magnet.make_scene(2.2, 0.001, 1.2228)).folds == []
     res = fold_pairs([2.2, 2.2, 2.2], [0.001, 0.0236, 0.0236], [1.2228, 1.2228, 1.2228])
     assert res.status[0] == NOT_BISTABLE and np.all(np.isnan(res.alpha_deg[0]))
     assert res.bistable[1:].all() and np.all(np.isfinite(res.alpha_deg[1:]))
@@ -118,10 +119,10 @@ def test_small_clearances_found_from_the_first_bracketing_cells():
     of locate_folds, and a map (design_map.solve_points) reports them bistable with it."""
     import jax
 
-    from jaxrod.analysis import design_map
-    from jaxrod.analysis.batch import fold_pair_states
-    from jaxrod.analysis.fold_curves import DesignPoint
+    from jaxrod.bistability import design_map
+    from jaxrod.design_point import DesignPoint
     from jaxrod.discretise.planar import planar_discretisation
+    from jaxrod.magnet.batch import fold_pair_states
 
     disc = planar_discretisation(12, "clamped")
     rows = [(2.263, 2.263 * 0.0236 / 2.2, 1.1908), (1.760, 1.760 * 0.0236 / 2.2, 1.1872)]
@@ -145,8 +146,8 @@ def test_two_programs_at_once_do_not_hang():
     ones."""
     code = """
 import jax, numpy as np
-from jaxrod.analysis.batch import fold_pairs_program
-from jaxrod.analysis.design_map import _per_device, _sharded
+from jaxrod.magnet.batch import fold_pairs_program
+from jaxrod.bistability.design_map import _per_device, _sharded
 assert len(jax.local_devices()) == 2
 E = np.random.default_rng(0).uniform(80, 250, 2048)
 G, M, D = 2.2 * 200 / E, 0.0236 * 200 / E, np.full(2048, 11.25 / 9.2)
@@ -185,9 +186,10 @@ def test_near_the_cusp_every_answer_is_that_of_locate_folds():
     assert (res.status != NOT_CONVERGED).sum() >= 0.9 * K
     for i in range(K):
         if res.status[i] == NOT_CONVERGED:
-            assert not magnet.locate_folds(magnet.make_scene(G[i], M[i], Ds[i]), n=12).converged
+            scene = magnet.make_scene(G[i], M[i], Ds[i])
+            assert not magnet_folds.locate_folds(scene, n=12).converged
             continue
-        rep = magnet.locate_folds(magnet.make_scene(G[i], M[i], Ds[i]), n=16)
+        rep = magnet_folds.locate_folds(magnet.make_scene(G[i], M[i], Ds[i]), n=16)
         kinds = {f.kind: f.alpha_deg for f in rep.folds}
         pair = rep.converged and {"lower", "upper"} <= kinds.keys() and kinds["upper"] <= 90
         assert res.bistable[i] == pair, (G[i], M[i], Ds[i], res.messages()[i])

@@ -13,12 +13,13 @@ import numpy as np
 import pytest
 from figure_checks import check_figure
 
-from jaxrod.analysis import calibration
-from jaxrod.analysis.design import design
-from jaxrod.analysis.fit import Prior, _problem, default_point, fit, profile
-from jaxrod.analysis.fold_curves import DesignPoint
-from jaxrod.analysis.magnet import locate_folds, make_scene
+from jaxrod.design_point import DesignPoint
 from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.inverse import calibration
+from jaxrod.inverse.design import design
+from jaxrod.inverse.fit import Prior, _problem, default_point, fit, profile
+from jaxrod.magnet.diagram import make_scene
+from jaxrod.magnet.folds import locate_folds
 from jaxrod.params import ParameterError
 from jaxrod.plotting import profile_figure
 

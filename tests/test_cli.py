@@ -158,7 +158,8 @@ def test_cusp_json(capsys):
     assert out["vary"] == "D" and out["converged"] is True
     assert {"D", "alpha_deg", "q", "tip_deg", "cubic_coefficient"} <= set(out["cusp"])
     # the fold system's value, against the one-parameter fold pair just before the cusp
-    from jaxrod.analysis.magnet import locate_folds, make_scene
+    from jaxrod.magnet.diagram import make_scene
+    from jaxrod.magnet.folds import locate_folds
 
     rep = locate_folds(make_scene(2.2, 0.0236, out["cusp"]["D"] - 3e-3))
     low, up = rep.folds

@@ -9,8 +9,12 @@ import numpy as np
 import pytest
 from jax import monitoring
 
-from jaxrod.analysis import fit, greenhill, magnet
-from jaxrod.analysis.batch import fold_pairs
+from jaxrod.inverse import youngs as fit_youngs
+from jaxrod.magnet import diagram as magnet
+from jaxrod.magnet import folds as magnet_folds
+from jaxrod.magnet import sweep as magnet_sweep
+from jaxrod.magnet.batch import fold_pairs
+from jaxrod.uniform import greenhill
 
 _count = [0]
 _listening = [False]
@@ -59,14 +63,15 @@ def test_counter_sees_a_compilation():
 
 
 @pytest.mark.parametrize("name, call", [
-    ("fold_angles", lambda G, M: magnet.fold_angles(G, M, D_EXP)),
-    ("grad fold_angles", lambda G, M: jax.grad(lambda g: magnet.fold_angles(g, M, D_EXP)[0][1])(G)),
-    ("fold_pair", lambda G, M: magnet.fold_pair(magnet.make_scene(G, M, D_EXP))),
-    ("locate_folds", lambda G, M: magnet.locate_folds(magnet.make_scene(G, M, D_EXP), n=12)),
+    ("fold_angles", lambda G, M: magnet_folds.fold_angles(G, M, D_EXP)),
+    ("grad fold_angles",
+     lambda G, M: jax.grad(lambda g: magnet_folds.fold_angles(g, M, D_EXP)[0][1])(G)),
+    ("fold_pair", lambda G, M: magnet_folds.fold_pair(magnet.make_scene(G, M, D_EXP))),
+    ("locate_folds", lambda G, M: magnet_folds.locate_folds(magnet.make_scene(G, M, D_EXP), n=12)),
     ("fold_pairs", lambda G, M: fold_pairs(np.array([G, 1.1 * G]), np.array([M, M]),
                                            np.full(2, D_EXP))),
     ("greenhill", lambda G, M: greenhill.greenhill(4.0 * G, "clamped", A=300.0 * M)),
-    ("hysteresis_sweep", lambda G, M: magnet.hysteresis_sweep(
+    ("hysteresis_sweep", lambda G, M: magnet_sweep.hysteresis_sweep(
         magnet.make_scene(G, M, D_EXP), n=12, alpha_max_deg=10.0, step_deg=2.0)),
 ])
 def test_no_recompilation_for_new_values(name, call):
@@ -75,18 +80,18 @@ def test_no_recompilation_for_new_values(name, call):
 
 def test_fit_does_not_recompile():
     angles = [[-25.0, 38.0, 24.0, -42.0], [-26.0, 37.0, 25.0, -41.0], [-24.0, 39.0, 23.0, -43.0]]
-    fit.fit_youngs_modulus(angles[0], 1.0, True)
+    fit_youngs.fit_youngs_modulus(angles[0], 1.0, True)
     for a in angles[1:]:
         with compilations() as c:
-            fit.fit_youngs_modulus(a, 1.0, True)
+            fit_youngs.fit_youngs_modulus(a, 1.0, True)
         assert c[0] == 0
 
 
 def test_out_of_plane_rows_of_another_count_compile_nothing():
     """A diagram's length depends on the values; the out-of-plane check pads its rows to a
     power of two, so that 5 and 7 rows (a branch of another length) share one program."""
-    from jaxrod.analysis.outofplane import out_of_plane, out_of_plane_at_rows
     from jaxrod.discretise.planar import planar_discretisation
+    from jaxrod.three_d.outofplane import out_of_plane, out_of_plane_at_rows
 
     scene = magnet.make_scene(2.2, 0.0236, D_EXP)
     disc = planar_discretisation(8)

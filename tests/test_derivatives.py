@@ -128,7 +128,7 @@ def test_moore_spence_linearisation_is_the_residual_and_its_jacobian():
 def test_fold_coefficients_from_the_moore_spence_jacobian():
     """dF/dlam and d2F/dq2 read off the Jacobian Newton ends with (no new assembly) equal
     those assembled afresh at the fold (D^3E[phi] by a tangent of the Hessian)."""
-    from jaxrod.analysis.magnet import trace_diagram
+    from jaxrod.magnet.diagram import trace_diagram
     from jaxrod.solvers.folds import coefficients_at_fold, fold_coefficients, moore_spence_solve
 
     model, args, _ = CASES["magnet planar"]
@@ -151,7 +151,7 @@ def test_bordered_moore_spence_step_is_the_newton_step(where):
     """The block-eliminated step (bordered matrix [H phi; l^T 0], D^3E[phi] applied to
     vectors) equals the dense solve with the assembled Moore-Spence Jacobian, also at the
     fold, where H itself is singular."""
-    from jaxrod.analysis.batch import fold_pair_states
+    from jaxrod.magnet.batch import fold_pair_states
     from jaxrod.solvers.folds import moore_spence_blocks, moore_spence_step
 
     model, args, lam = CASES["magnet planar"]

@@ -13,7 +13,7 @@ import time
 import numpy as np
 import pytest
 
-from jaxrod.analysis.design_map import (
+from jaxrod.bistability.design_map import (
     FOLD_BEYOND_90,
     INVALID_INPUT,
     NOT_BISTABLE,
@@ -25,8 +25,8 @@ from jaxrod.analysis.design_map import (
     run_map,
     solve_points,
 )
-from jaxrod.analysis.fold_curves import DesignPoint
-from jaxrod.analysis.magnet import locate_folds
+from jaxrod.design_point import DesignPoint
+from jaxrod.magnet.folds import locate_folds
 from jaxrod.params import NDFEB_MAGNET, ParameterError, preset
 from jaxrod.scenes.dipole import DipoleMagnet
 

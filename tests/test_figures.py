@@ -12,7 +12,7 @@ import pytest  # noqa: E402
 from figure_checks import absent_legend_entries, check_figure, figure_title  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
-from jaxrod.analysis.magnet import figure_options  # noqa: E402
+from jaxrod.magnet.diagram import figure_options  # noqa: E402
 from jaxrod.plotting import _branch_segments  # noqa: E402
 
 pytestmark = pytest.mark.xdist_group("figures")

@@ -15,9 +15,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrod.analysis import fold_curves as fc
-from jaxrod.analysis.magnet import _equilibrium, locate_folds
+from jaxrod.bistability import fold_curves as fc
 from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.magnet.diagram import _equilibrium
+from jaxrod.magnet.folds import locate_folds
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet

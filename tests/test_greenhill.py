@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from scipy.special import ai_zeros
 
-from jaxrod.analysis import greenhill as gh
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import NICKEL, ParameterError, Rod
+from jaxrod.uniform import greenhill as gh
 
 G_VALUES = [0.1, 0.5, 2.0, 5.0, 20.0, 100.0, 400.0, 1000.0]
 

@@ -7,8 +7,10 @@ import pytest
 import shooting_reference as shooting
 
 from jaxrod import spectral
-from jaxrod.analysis import magnet
 from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.magnet import diagram as magnet
+from jaxrod.magnet import folds as magnet_folds
+from jaxrod.magnet import sweep as magnet_sweep
 from jaxrod.params import ParameterError
 from jaxrod.scenes.dipole import tip_angle, tip_position
 
@@ -18,7 +20,8 @@ CASES = {200: (2.2, 0.0236), 100: (4.4, 0.0472)}
 
 @pytest.fixture(scope="module")
 def reports():
-    return {e: magnet.locate_folds(magnet.make_scene(G, M, D_EXP)) for e, (G, M) in CASES.items()}
+    return {e: magnet_folds.locate_folds(magnet.make_scene(G, M, D_EXP))
+            for e, (G, M) in CASES.items()}
 
 
 def _shooting_fold(G, M, fold, n=16):
@@ -52,10 +55,10 @@ def test_folds_match_the_issue_independent_values_to_printed_digits(reports):
 def test_spectral_convergence_of_fold_angle():
     G, M = CASES[200]
     scene = magnet.make_scene(G, M, D_EXP)
-    ref = magnet.locate_folds(scene, n=32).folds
+    ref = magnet_folds.locate_folds(scene, n=32).folds
     errors = []
     for n in (6, 8, 10, 12):
-        folds = magnet.locate_folds(scene, n=n).folds
+        folds = magnet_folds.locate_folds(scene, n=n).folds
         errors.append(max(abs(a.alpha_deg - b.alpha_deg) for a, b in zip(folds, ref)))
     assert errors[-1] < 1e-10
     assert errors[0] > 1e2 * errors[-1]  # exponential decay, not stuck
@@ -123,7 +126,7 @@ def test_branch_shape_stability_and_detected_folds(reports):
 def test_hysteresis_sweep_snaps_just_past_the_folds(reports):
     G, M = CASES[200]
     lower, upper = reports[200].folds
-    sweep = magnet.hysteresis_sweep(magnet.make_scene(G, M, D_EXP), step_deg=0.25)
+    sweep = magnet_sweep.hysteresis_sweep(magnet.make_scene(G, M, D_EXP), step_deg=0.25)
     assert sweep["converged"]
     snaps = {(s["direction"], s["alpha_deg"] > 0): s["alpha_deg"] for s in sweep["snaps"]}
     assert len(sweep["snaps"]) == 4
@@ -137,7 +140,7 @@ def test_square_root_law(reports):
     G, M = CASES[200]
     scene = magnet.make_scene(G, M, D_EXP)
     for f in reports[200].folds:
-        fit = magnet.square_root_law(scene, f)
+        fit = magnet_sweep.square_root_law(scene, f)
         assert sorted(side["stable"] for side in fit.values()) == [False, True]
         for side in fit.values():
             assert side["converged"]
@@ -145,7 +148,7 @@ def test_square_root_law(reports):
 
 
 def test_no_fold_no_hysteresis():
-    rep = magnet.locate_folds(magnet.make_scene(2.2, 0.002, D_EXP))
+    rep = magnet_folds.locate_folds(magnet.make_scene(2.2, 0.002, D_EXP))
     assert rep.folds == [] and rep.hysteresis_width_deg is None and rep.converged
 
 

@@ -6,9 +6,10 @@ import json
 
 import numpy as np
 
-from jaxrod.analysis import calibration, design_map
-from jaxrod.analysis.design_map import read_store
+from jaxrod.bistability import design_map
+from jaxrod.bistability.design_map import read_store
 from jaxrod.cli import BATCH_N, main
+from jaxrod.inverse import calibration
 
 
 def test_the_command_line_default_is_the_programs_default():

@@ -6,14 +6,15 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxrod.analysis import magnet
-from jaxrod.analysis.outofplane import out_of_plane, out_of_plane_batch
 from jaxrod.discretise.director import director_discretisation
 from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.magnet import diagram as magnet
+from jaxrod.magnet import folds as magnet_folds
 from jaxrod.scenes.three_d import DipoleMagnet3D, UniformField3D, magnet_position
 from jaxrod.scenes.uniform import UniformField
 from jaxrod.solvers.descent import descend
 from jaxrod.solvers.newton import newton
+from jaxrod.three_d.outofplane import out_of_plane, out_of_plane_batch
 
 D = 11.25 / 9.2
 N = 16
@@ -81,7 +82,7 @@ def test_magnet_off_the_plane_gives_the_rotated_planar_equilibrium():
 def test_out_of_plane_form_is_positive_on_the_engaged_branch_and_matches_the_formula(G, M):
     scene = magnet.make_scene(G, M, D)
     disc = planar_discretisation(N)
-    report = magnet.locate_folds(scene, n=N)
+    report = magnet_folds.locate_folds(scene, n=N)
     b = report.branch
     upper = [f for f in report.folds if f.kind == "upper"][0]
     sel = b.engaged  # from the straight rod up to the upper fold

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from jaxrod.analysis.greenhill import greenhill
-from jaxrod.analysis.pitchfork import buckled_branch
+from jaxrod.uniform.greenhill import greenhill
+from jaxrod.uniform.pitchfork import buckled_branch
 
 
 @pytest.mark.parametrize("support, G, kind", [

@@ -10,14 +10,16 @@ import reduction_reference
 from scipy.integrate import solve_bvp
 from scipy.optimize import brentq
 
-from jaxrod.analysis import magnet
-from jaxrod.analysis.contraction import (
+from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.magnet import diagram as magnet
+from jaxrod.magnet import folds as magnet_folds
+from jaxrod.magnet.contraction import (
     contraction_constants,
     dual_norm,
     point_hypotheses,
     scene_hypotheses,
 )
-from jaxrod.analysis.reduction import (
+from jaxrod.magnet.reduction import (
     check_reducible,
     correction,
     normalised_mode,
@@ -30,7 +32,6 @@ from jaxrod.analysis.reduction import (
     reduction,
     second_variation_checks,
 )
-from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import ParameterError
 
 D_PAPER = 11.25 / 9.2
@@ -76,7 +77,8 @@ def folds():
     out = {}
     for name, (G, M) in CASES.items():
         scene = magnet.make_scene(G, M, D_PAPER)
-        out[name] = (scene, reduced_folds(scene, n=16), magnet.locate_folds(scene, n=16).folds)
+        out[name] = (scene, reduced_folds(scene, n=16),
+                     magnet_folds.locate_folds(scene, n=16).folds)
     return out
 
 

@@ -9,8 +9,11 @@ import jax
 import numpy as np
 import pytest
 
-from jaxrod.analysis import fit, greenhill, magnet
-from jaxrod.analysis.batch import fold_pairs
+from jaxrod.inverse import youngs as fit_youngs
+from jaxrod.magnet import diagram as magnet
+from jaxrod.magnet import folds as magnet_folds
+from jaxrod.magnet.batch import fold_pairs
+from jaxrod.uniform import greenhill
 
 D_EXP = 11.25 / 9.2
 MAPS = Path("/proc/self/maps")
@@ -29,14 +32,14 @@ def _calls():
     G = lambda E: 2.2 * 200.0 / E
     M = lambda E: 0.0236 * 200.0 / E
     return [
-        ("fold_angles", lambda E: magnet.fold_angles(G(E), M(E), D_EXP)),
+        ("fold_angles", lambda E: magnet_folds.fold_angles(G(E), M(E), D_EXP)),
         ("grad fold_angles", lambda E: jax.grad(
-            lambda g: magnet.fold_angles(g, M(E), D_EXP)[0][1])(G(E))),
-        ("fold_pair", lambda E: magnet.fold_pair(magnet.make_scene(G(E), M(E), D_EXP))),
+            lambda g: magnet_folds.fold_angles(g, M(E), D_EXP)[0][1])(G(E))),
+        ("fold_pair", lambda E: magnet_folds.fold_pair(magnet.make_scene(G(E), M(E), D_EXP))),
         ("fold_pairs", lambda E: fold_pairs(np.array([G(E), 1.1 * G(E)]),
                                             np.array([M(E), M(E)]), np.full(2, D_EXP))),
         ("greenhill", lambda E: greenhill.greenhill(4.0 * G(E), "clamped", A=300.0 * M(E))),
-        ("fit", lambda E: fit.fit_youngs_modulus([-25.0, 38.0, 24.0, -42.0], 1.0, True,
+        ("fit", lambda E: fit_youngs.fit_youngs_modulus([-25.0, 38.0, 24.0, -42.0], 1.0, True,
                                                  E0=E * 1e9)),
     ]
 

@@ -4,13 +4,15 @@ results as the traced one, and a damaged file falls back to tracing."""
 import numpy as np
 
 from jaxrod import stored
-from jaxrod.analysis import magnet
+from jaxrod.magnet import diagram as magnet
+from jaxrod.magnet import folds as magnet_folds
 
 D_EXP = 11.25 / 9.2
 
 
 def _folds(G, M):
-    return [f.alpha_deg for f in magnet.locate_folds(magnet.make_scene(G, M, D_EXP), n=12).folds]
+    scene = magnet.make_scene(G, M, D_EXP)
+    return [f.alpha_deg for f in magnet_folds.locate_folds(scene, n=12).folds]
 
 
 def test_programs_read_back_from_the_store_match_the_traced_ones(tmp_path):
@@ -20,10 +22,10 @@ def test_programs_read_back_from_the_store_match_the_traced_ones(tmp_path):
         written = _folds(2.2, 0.0236)
         files = sorted(tmp_path.glob("*.jaxexport"))
         assert {f.name.split("-")[1] for f in files} == {"diagram", "refine"}
-        for program in (magnet._diagram, magnet._refine_batch):
+        for program in (magnet._diagram, magnet_folds._refine_batch):
             program._loaded.clear()  # as in a new process: read the files
         read = _folds(2.0, 0.0236)
-        assert all(p._loaded for p in (magnet._diagram, magnet._refine_batch))
+        assert all(p._loaded for p in (magnet._diagram, magnet_folds._refine_batch))
         stored.enable_store(None)
         reference = _folds(2.0, 0.0236)
         np.testing.assert_allclose(written, traced, rtol=0, atol=1e-12)
@@ -32,7 +34,7 @@ def test_programs_read_back_from_the_store_match_the_traced_ones(tmp_path):
         stored.enable_store(tmp_path)
         for f in files:
             f.write_bytes(f.read_bytes()[:100])
-        for program in (magnet._diagram, magnet._refine_batch):
+        for program in (magnet._diagram, magnet_folds._refine_batch):
             program._loaded.clear()
         np.testing.assert_allclose(_folds(2.0, 0.0236), reference, rtol=0, atol=1e-12)
         assert all(f.stat().st_size > 100 for f in files)

@@ -6,10 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from jaxrod.analysis import magnet
-from jaxrod.analysis.greenhill import greenhill
-from jaxrod.analysis.magnet_track import trace_track
-from jaxrod.analysis.pitchfork import buckled_branch
+from jaxrod.magnet import diagram as magnet
+from jaxrod.magnet import folds as magnet_folds
+from jaxrod.three_d.track import trace_track
+from jaxrod.uniform.greenhill import greenhill
+from jaxrod.uniform.pitchfork import buckled_branch
 
 D = 11.25 / 9.2
 
@@ -41,7 +42,7 @@ def test_3d_post_buckled_branch_reproduces_the_a2_formula(support, G, kind):
 
 def test_magnet_track_leaving_the_plane_snaps_where_the_planar_folds_are():
     scene = magnet.make_scene(2.2, 0.0236, D)
-    planar = {f.kind: f.alpha_deg for f in magnet.locate_folds(scene, n=16).folds}
+    planar = {f.kind: f.alpha_deg for f in magnet_folds.locate_folds(scene, n=16).folds}
     track = trace_track(scene, alpha0_deg=20.0, tilt_deg=90.0, n=16)
     assert track.status == "reached the parameter bound"
     assert track.out_of_plane.max() > 0.5  # genuinely 3D states

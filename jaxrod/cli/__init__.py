@@ -1,0 +1,86 @@
+"""Command-line front end: ``jaxrod greenhill | folds | branch | sweep | fit | design |
+certify | outofplane | track | cusp | foldcurve | map | reproduce`` (``jaxrod -h`` lists
+them).
+
+Every command prints a human-readable report, or one JSON object with ``--json``. Invalid
+input exits with status 2 and a one-line message naming the parameter. One module per
+question (``uniform``, ``magnet``, ``three_d``, ``bistability``, ``inverse``, ``reproduce``),
+each with its commands and their options; ``_inputs`` validates the options once and builds
+the rod, magnet or design point from them; ``_output`` writes what the commands share. The
+commands call only public functions of jaxrod (imported inside each command, so that the
+command line's start-up imports only what the command runs).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import sys
+
+from jaxrod.cli._inputs import BATCH_N
+from jaxrod.cli._output import _enable_compilation_cache
+from jaxrod.cli.bistability import add_cusp, add_foldcurve, add_map
+from jaxrod.cli.inverse import add_design, add_fit
+from jaxrod.cli.magnet import add_branch, add_certify, add_folds, add_sweep
+from jaxrod.cli.reproduce import add_reproduce
+from jaxrod.cli.three_d import add_outofplane, add_track
+from jaxrod.cli.uniform import add_greenhill
+from jaxrod.params import ParameterError
+from jaxrod.progress import ctrl_c_guard
+
+__all__ = ["BATCH_N", "build_parser", "main", "run"]
+
+
+class _OneLineErrorParser(argparse.ArgumentParser):
+    """Usage errors as one line on stderr, exit status 2; negative numbers in any notation
+    (``--E -1e9``, ``--alpha -2.5e1``) are values, not options."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-inf(inity)?$", re.IGNORECASE)
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _OneLineErrorParser(
+        prog="jaxrod", description="Stability, folds and hysteresis of slender ferromagnetic "
+        "rods under gravity and magnetic fields. Each command prints a report, or one JSON "
+        "object with --json; bad input exits with status 2, a failed solve with status 1.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_OneLineErrorParser)
+    for add in (add_greenhill, add_folds, add_outofplane, add_track, add_certify, add_branch,
+                add_sweep, add_fit, add_design, add_cusp, add_foldcurve, add_map, add_reproduce):
+        add(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if getattr(args, "n_fallback", None) is not None:
+        args.n_default = args.n is None
+        args.n = args.n_fallback if args.n is None else args.n
+    _enable_compilation_cache()
+    try:
+        with ctrl_c_guard():
+            return args.func(args)
+    except ParameterError as err:
+        print(f"jaxrod {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"jaxrod {args.command}: interrupted (Ctrl-C)", file=sys.stderr)
+        return 130
+
+
+def run() -> None:
+    """The ``jaxrod`` command. After Ctrl-C the process ends at once (os._exit): compiler
+    threads interrupted midway must not run the interpreter's teardown."""
+    code = main()
+    if code == 130:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
+    sys.exit(code)

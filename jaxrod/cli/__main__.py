@@ -1,0 +1,5 @@
+"""``python -m jaxrod.cli``."""
+
+from jaxrod.cli import run
+
+run()

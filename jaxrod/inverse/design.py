@@ -1,0 +1,252 @@
+"""Inverse design: the inputs whose folds capture and release at target angles.
+
+"Capture at 20 degrees, release at 45 degrees: which track radius and magnet diameter?"
+The targets are the folds of the planar branch, alpha_lower = capture and alpha_upper =
+release (a sweep of increasing magnet angle captures the rod at -alpha_lower and releases
+it at alpha_upper; the offset is zero). The inputs named in ``vary`` are solved for by the
+least-squares program of ``jaxrod.inverse.calibration`` (optax L-BFGS with an Armijo line
+search over relative log changes of the inputs, folds implicitly differentiated) with the
+four angles as data, within bounds; the line search rejects every trial point where the
+magnet could touch the rod, a group leaves its valid range or the diagram has no two folds
+(only bistable designs). The program starts from the given point and from a grid of
+points inside the bounds, so that separate solutions are each found; every solution is
+verified by a fresh ``locate_folds`` (continuation from the straight rod and Moore-Spence)
+at the answer.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+
+import numpy as np
+
+from jaxrod.design_point import DesignPoint, range_of
+from jaxrod.inverse.calibration import MODEL_N, OFFSET, parameter_names, solve_program
+from jaxrod.inverse.fit import _check_bounds, _check_names, _problem
+from jaxrod.magnet.diagram import make_scene
+from jaxrod.magnet.folds import locate_folds
+from jaxrod.params import UNITS, ParameterError, check_degree, check_value
+
+#: A design hits its targets when the model's folds lie within this of them (degrees).
+HIT_DEG = 1e-6
+#: The fresh ``locate_folds`` at a design must agree with the model's folds to this (deg).
+VERIFY_DEG = 1e-6
+#: Default bounds of a varied input: a factor of this either side of its given value.
+DEFAULT_FACTOR = 3.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Design:
+    """One design: the varied inputs' values, the folds reached by the model and by the
+    independent check (``locate_folds``), and whether both hit the targets."""
+
+    values: dict
+    capture_deg: float
+    release_deg: float
+    verified_capture_deg: float | None
+    verified_release_deg: float | None
+    converged: bool
+    verified: bool
+    iterations: int
+    #: what the independent check found, in words, when it is not the two folds
+    check: str | None = None
+
+    def as_dict(self) -> dict:
+        return self.values | {"capture_deg": self.capture_deg,
+                              "release_deg": self.release_deg,
+                              "verified_capture_deg": self.verified_capture_deg,
+                              "verified_release_deg": self.verified_release_deg,
+                              "converged": self.converged, "verified": self.verified,
+                              "iterations": self.iterations, "check": self.check}
+
+
+@dataclasses.dataclass(frozen=True)
+class DesignResult:
+    """Every distinct design found for the targets (best first), and the search."""
+
+    capture_deg: float
+    release_deg: float
+    vary: tuple[str, ...]
+    bounds: dict
+    designs: list
+    starts: int
+    point: DesignPoint
+    n: int = 12
+    verify_n: int = 16
+
+    @property
+    def family(self) -> int:
+        """How many dimensions the designs span: the varied inputs beyond the two targets
+        (0: isolated designs; more: a family, of which ``designs`` are samples)."""
+        return max(len(self.vary) - 2, 0)
+
+    def as_dict(self) -> dict:
+        best = self.designs[0].as_dict() if self.designs else {}
+        return best | {"targets": {"capture_deg": self.capture_deg,
+                                   "release_deg": self.release_deg},
+                       "vary": list(self.vary),
+                       "units": {n: UNITS[n] for n in self.vary},
+                       "bounds": {k: list(v) for k, v in self.bounds.items()},
+                       "solutions": [d.as_dict() for d in self.designs],
+                       "starts": self.starts, "point": self.point.as_dict(),
+                       "n": self.n, "verify_n": self.verify_n, "family": self.family,
+                       "converged": bool(self.designs) and self.designs[0].verified}
+
+
+def check_targets(capture_deg: float, release_deg: float) -> tuple[float, float]:
+    """Validate the target angles: 0 < capture < release < 90 degrees."""
+    capture = check_value("capture", capture_deg, lambda x: -90.0 < x < 90.0,
+                          "an angle in (0, 90) degrees")
+    release = check_value("release", release_deg, lambda x: -90.0 < x < 90.0,
+                          "an angle in (0, 90) degrees (a release beyond 90 degrees is past "
+                          "the horizontal)")
+    if not capture > 0.0:
+        raise ParameterError(f"capture: the capture angle is the lower fold, in (0, 90) "
+                             f"degrees, got {capture_deg!r}")
+    if not release > capture:
+        raise ParameterError(f"release: the release angle (upper fold) must exceed the "
+                             f"capture angle {capture:g} deg (the loop opens between them), "
+                             f"got {release_deg!r}")
+    return capture, release
+
+
+def default_bounds(point: DesignPoint, vary) -> dict:
+    """A factor ``DEFAULT_FACTOR`` either side of each varied input, within its range."""
+    out = {}
+    for name in vary:
+        v = point.values[point.index(name)]
+        r = range_of(name)
+        lo, hi = max(v / DEFAULT_FACTOR, r.low), min(v * DEFAULT_FACTOR, r.high)
+        if name == "D":
+            lo = max(lo, 1.0 + point.radius() + 1e-9)
+        out[name] = (lo, hi)
+    return out
+
+
+def _starts(point: DesignPoint, vary, bounds, per_axis: int) -> list[np.ndarray]:
+    """The given point and a grid of per_axis^k points inside the bounds (log-spaced)."""
+    names = parameter_names(point.kind)
+    starts = [np.zeros(len(names))]
+    axes = []
+    for name in vary:
+        lo, hi = bounds[name]
+        v0 = point.values[point.index(name)]
+        fractions = (np.arange(per_axis) + 0.5) / per_axis
+        axes.append(np.log(lo / v0) + fractions * np.log(hi / lo))
+    for combo in itertools.product(*axes):
+        p = np.zeros(len(names))
+        for name, u in zip(vary, combo):
+            p[names.index(name)] = u
+        starts.append(p)
+    return starts
+
+
+def design(point: DesignPoint, capture_deg: float, release_deg: float, vary,
+           bounds: dict | None = None, starts_per_axis: int = 3,
+           n: int = MODEL_N) -> DesignResult:
+    """Designs whose folds capture and release at the targets (module docstring).
+
+    ``point``: the design to start from and the values of the inputs not varied (groups
+    or physical); ``vary``: the inputs to solve for (names of ``point``); ``bounds``: name
+    -> (lo, hi) (default ``default_bounds``); ``n``: the Chebyshev degree of the model's
+    folds (each design is verified by ``locate_folds`` at max(n, 16)). Raises ParameterError
+    when no bistable design within the bounds reaches the targets (the closest found is in
+    the message).
+
+    Targets: the lower fold at ``capture_deg`` and the upper at ``release_deg`` (Proposition
+    ``thm:planar_fold``; the design rule of section ``s.discussion`` of the paper).
+    """
+    capture, release = check_targets(capture_deg, release_deg)
+    degree = check_degree(n, "N-magnet")  # (``n`` names inputs below)
+    vary = _check_names(vary, point.names, "vary")
+    if not vary:
+        raise ParameterError("vary: name at least one input to solve for")
+    if OFFSET in vary:
+        raise ParameterError("vary: the offset is not a design input")
+    given = _check_bounds(dict(bounds or {}), point)
+    unknown = [n for n in given if n not in vary]
+    if unknown:
+        raise ParameterError(f"bounds: {', '.join(unknown)} not varied (vary: "
+                             f"{', '.join(vary)})")
+    for name, (lo, hi) in given.items():
+        r = range_of(name)
+        if not (r.contains(lo) and r.contains(hi)):
+            raise ParameterError(f"bounds {name}: ({lo:g}, {hi:g}) must lie within the valid "
+                                 f"range {r.interval()}")
+        if name == "D" and lo <= 1.0 + point.radius():
+            raise ParameterError(f"bounds D: the lower bound {lo:g} must exceed 1 + magnet "
+                                 f"radius / L = {1.0 + point.radius():g} (the magnet would "
+                                 "touch the rod)")
+    bounds = default_bounds(point, vary) | given
+    if not all(bounds[n][0] <= point.values[point.index(n)] <= bounds[n][1] for n in vary):
+        # start inside the bounds: the geometric centre of the box
+        values = list(point.values)
+        for n in vary:
+            values[point.index(n)] = math.sqrt(bounds[n][0] * bounds[n][1])
+        point = dataclasses.replace(point, values=tuple(values))
+    measured = np.array([-capture, release, capture, -release])
+    mask = np.ones(4, bool)
+    found, closest = [], None
+    starts = _starts(point, vary, bounds, starts_per_axis)
+    names = parameter_names(point.kind)
+    for p in starts:
+        problem = _problem(point, measured, mask, 1.0, vary, {}, bounds, p)
+        sol = solve_program(point.kind, problem, n=degree)
+        model = np.asarray(sol.angles)
+        miss = float(np.max(np.abs(model - measured)))
+        values = point.values * np.exp(np.asarray(sol.result.p)[:-1])
+        candidate = ({n: float(values[names.index(n)]) for n in vary}, model, miss,
+                     bool(sol.result.converged) and bool(sol.found), int(sol.result.iterations))
+        if bool(sol.found) and (closest is None or miss < closest[2]):
+            closest = candidate
+        if candidate[3] and miss <= HIT_DEG and not any(
+                all(abs(candidate[0][n] / d[0][n] - 1.0) < 1e-6 for n in vary) for d in found):
+            found.append(candidate)
+    if not found:
+        raise ParameterError(_infeasible(capture, release, vary, bounds, closest))
+    designs = [_verified(point, c, capture, release, max(degree, 16)) for c in found]
+    designs.sort(key=lambda d: (not d.verified, _distance(point, d.values)))
+    return DesignResult(capture, release, vary, bounds, designs, len(starts), point, degree,
+                        max(degree, 16))
+
+
+def _distance(point: DesignPoint, values: dict) -> float:
+    return sum(math.log(v / point.values[point.index(n)]) ** 2 for n, v in values.items())
+
+
+def _verified(point: DesignPoint, candidate, capture, release, degree: int) -> Design:
+    values, model, _, converged, iterations = candidate
+    at = point
+    for n, v in values.items():
+        at = at.replace(n, v)
+    G, M, D = at.groups()
+    report = locate_folds(make_scene(G, M, D, at.radius()), n=degree)
+    folds = [f.alpha_deg for f in report.folds] if len(report.folds) == 2 else None
+    check = None
+    if folds is None:
+        angles = ", ".join(f"{f.alpha_deg:.6g}" for f in report.folds)
+        check = (f"locate_folds finds {len(report.folds)} folds on the branch through the "
+                 f"straight rod ({angles} deg), not two: the sweep's capture and release are "
+                 "not the model's pair of folds" if report.folds else
+                 "locate_folds finds no fold on the branch through the straight rod")
+    verified = (folds is not None and report.converged
+                and abs(folds[0] - capture) <= VERIFY_DEG
+                and abs(folds[1] - release) <= VERIFY_DEG)
+    return Design(values=values, capture_deg=float(model[2]), release_deg=float(model[1]),
+                  verified_capture_deg=None if folds is None else folds[0],
+                  verified_release_deg=None if folds is None else folds[1],
+                  converged=converged, verified=verified, iterations=iterations, check=check)
+
+
+def _infeasible(capture, release, vary, bounds, closest) -> str:
+    box = ", ".join(f"{n} in [{lo:.6g}, {hi:.6g}]" for n, (lo, hi) in bounds.items())
+    text = (f"capture/release: no bistable design with {box} has its folds at "
+            f"{capture:g} and {release:g} deg")
+    if closest is not None:
+        values, model, _, _, _ = closest
+        at = ", ".join(f"{n} = {v:.6g}" for n, v in values.items())
+        text += (f"; the closest reached capture {model[2]:.4g} and release {model[1]:.4g} "
+                 f"deg at {at}")
+    return text + " (widen the bounds, vary other inputs, or move the targets)"

@@ -1,0 +1,146 @@
+"""The experiment's quasi-static protocol on the permanent magnet's diagram: the hysteresis
+sweep (the rod follows its equilibrium and snaps at the folds) and the square-root law of the
+tip angle next to a fold."""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.magnet.diagram import (
+    DEFAULT_N,
+    _alpha_jacobian,
+    _alpha_residual,
+    _equilibrium,
+    _observables,
+    _relax,
+)
+from jaxrod.magnet.folds import Fold
+from jaxrod.params import check, check_degree
+from jaxrod.programs import jit
+from jaxrod.progress import Interrupted
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
+from jaxrod.solvers.descent import descend
+from jaxrod.solvers.newton import newton
+
+
+def _follow_step(carry, alpha, scene, disc):
+    theta_prev = carry
+    args = (scene, disc)
+    res = newton(_alpha_residual, theta_prev, (alpha, *args), tol=1e-12,
+                 jacobian=_alpha_jacobian)
+    H = ALPHA_MODEL.hessian(res.x, alpha, args)
+    stable = jnp.linalg.eigvalsh(H)[0] > 0.0
+    close = jnp.sqrt(jnp.mean((res.x - theta_prev) ** 2)) < 0.1
+    followed = res.converged & stable & close
+
+    def snap(_):
+        d = descend(ALPHA_MODEL, theta_prev, args, lam=alpha)
+        return d.x, d.converged
+
+    theta, ok = jax.lax.cond(followed, lambda _: (res.x, res.converged), snap, None)
+    return theta, (theta, ~followed, ok)
+
+
+@jit
+def _sweep(theta0, alphas, scene, disc):
+    return jax.lax.scan(lambda c, a: _follow_step(c, a, scene, disc), theta0, alphas)
+
+
+#: Magnet positions per compiled chunk of a sweep (progress and Ctrl-C act between chunks).
+SWEEP_CHUNK = 256
+
+
+def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: float = 50.0,
+                     step_deg: float = 0.25, progress=None) -> dict:
+    """The experiment's protocol: alpha from -alpha_max to +alpha_max (clockwise), then back.
+
+    At each magnet position the previous state is continued by Newton; when it no longer
+    exists as a nearby stable equilibrium (a fold was passed) the rod snaps: the energy is
+    descended from the last state to the other stable branch. Returns both sweeps, the snap
+    angles on the grid (the first grid angle past a fold) and whether every step converged.
+
+    The positions run in compiled chunks of ``SWEEP_CHUNK`` (one program for every chunk);
+    ``progress(done, total)`` is called after each. Ctrl-C raises
+    ``jaxrod.progress.Interrupted`` whose ``partial`` is this dict for the positions done
+    (``complete`` False, ``reason`` saying where).
+
+    Paper: the loop of eq. ``intro-hysteresis`` and Theorem ``thm:permanent_physical``
+    (capture at the lower fold, release at the upper).
+    """
+    alpha_max_deg = check("alpha-max", alpha_max_deg)
+    step_deg = check("step", step_deg)
+    disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
+    up = np.arange(-alpha_max_deg, alpha_max_deg + 0.5 * step_deg, step_deg)
+    alphas = np.radians(np.concatenate([up, up[::-1][1:]]))
+    start = _relax(jnp.zeros(disc.size), alphas[0], scene, disc)
+    theta, parts = start.x, []
+    try:
+        for i in range(0, alphas.size, SWEEP_CHUNK):
+            chunk = alphas[i:i + SWEEP_CHUNK]
+            padded = np.pad(chunk, (0, SWEEP_CHUNK - chunk.size), mode="edge")
+            theta_end, (thetas, snapped, ok) = _sweep(theta, jnp.asarray(padded), scene, disc)
+            thetas, snapped, ok = (np.asarray(v)[:chunk.size] for v in (thetas, snapped, ok))
+            theta = theta_end
+            parts.append((thetas, snapped, ok))
+            if progress is not None:
+                progress(min(i + SWEEP_CHUNK, alphas.size), alphas.size)
+    except KeyboardInterrupt:
+        done = sum(p[0].shape[0] for p in parts)
+        raise Interrupted(_sweep_result(alphas[:done], up.size, parts, start, scene, disc,
+                                        f"interrupted (Ctrl-C) after {done} of {alphas.size} "
+                                        "magnet positions"), "sweep") from None
+    return _sweep_result(alphas, up.size, parts, start, scene, disc, None)
+
+
+def _sweep_result(alphas, n_up, parts, start, scene, disc, reason) -> dict:
+    if parts:
+        thetas, snapped, ok = (np.concatenate(v) for v in zip(*parts))
+        q, tip, _ = _observables(jnp.asarray(thetas), jnp.asarray(alphas), scene, disc)
+    else:
+        snapped, ok, q, tip = (np.zeros(0, bool), np.zeros(0, bool), np.zeros(0), np.zeros(0))
+    direction = np.where(np.arange(alphas.size) < n_up, "cw", "ccw")
+    snaps = [{"direction": str(direction[i]), "alpha_deg": float(np.degrees(alphas[i])),
+              "tip_before_deg": float(np.degrees(tip[i - 1])),
+              "tip_after_deg": float(np.degrees(tip[i]))}
+             for i in np.nonzero(snapped)[0]]
+    return {"alpha_deg": np.degrees(alphas), "tip_deg": np.degrees(np.asarray(tip)),
+            "q": np.asarray(q), "snapped": snapped, "direction": direction, "snaps": snaps,
+            "converged": bool(np.all(ok) and bool(start.converged)),
+            "complete": reason is None, "reason": reason}
+
+
+def square_root_law(scene: DipoleMagnet, fold: Fold, n: int = DEFAULT_N,
+                    offsets_deg=np.geomspace(1e-5, 1e-2, 7)) -> dict:
+    """Fit the exponent p in |tip - tip*| ~ |alpha - alpha*|^p on both branches at a fold.
+
+    Returns, for the branch with q > q* and the one with q < q*, the fitted exponent, whether
+    all solves converged, and whether that branch is stable.
+
+    Equilibria at alpha* - sign(c) delta (the side where they exist) are found by Newton
+    from the fold state shifted along the null vector by the normal form,
+    q - q* = +-sqrt(delta / |c|); the exponent is the least-squares slope in log-log.
+
+    Paper: Corollary ``cor:tip_angle_fold`` (tip - tip* ~ sqrt(alpha - alpha*) at a fold).
+    """
+    disc = planar_discretisation(n, "clamped")
+    a_star = math.radians(fold.alpha_deg)
+    out = {}
+    for side, sign in (("q > q*", 1.0), ("q < q*", -1.0)):
+        dtips, ok = [], True
+        for d in np.radians(offsets_deg):
+            alpha = a_star + math.copysign(d, fold.normal_form_c)
+            dq = math.sqrt(d / abs(fold.normal_form_c))
+            guess = jnp.asarray(fold.theta + sign * dq * fold.null_vector)
+            res = _equilibrium(guess, alpha, scene, disc)
+            ok &= bool(res.converged)
+            dtips.append(abs(float(tip_angle(res.x, disc)) - math.radians(fold.tip_deg)))
+        H = ALPHA_MODEL.hessian(res.x, alpha, (scene, disc))
+        slope = np.polyfit(np.log(np.radians(offsets_deg)), np.log(dtips), 1)[0]
+        out[side] = {"exponent": float(slope), "converged": ok,
+                     "stable": bool(jnp.linalg.eigvalsh(H)[0] > 0.0)}
+    return out

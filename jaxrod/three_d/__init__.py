@@ -1,0 +1,2 @@
+"""Three dimensions: out-of-plane stability of planar states and magnet tracks off the
+plane."""
