@@ -31,7 +31,7 @@ from jaxrod.params import (
 
 
 def _measured_from_args(args) -> list:
-    from jaxrod.inverse.fit import ANGLE_NAMES
+    from jaxrod.inverse.calibration import ANGLE_NAMES
 
     named = [getattr(args, name) for name in ANGLE_NAMES]
     if args.angles is not None:
@@ -70,7 +70,8 @@ def _physical_point(args):
 
 
 def cmd_fit(args) -> int:
-    from jaxrod.inverse.fit import ANGLE_NAMES, FREE_NAMES, OFFSET, Prior, fit, profile
+    from jaxrod.inverse.calibration import ANGLE_NAMES
+    from jaxrod.inverse.fit import FREE_NAMES, OFFSET, Prior, fit, profile
 
     measured = _measured_from_args(args)
     args.sigma_given = args.sigma_deg is not None
