@@ -22,6 +22,7 @@ at the parameter bounds, after ``max_folds`` folds, when full, or when the step 
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -30,9 +31,16 @@ import jax.numpy as jnp
 
 from jaxrod.derivatives import EnergyModel, as_model
 from jaxrod.programs import jit
-from jaxrod.solvers.newton import newton
+from jaxrod.solvers.arclength import (
+    CAPACITY_FULL,
+    REACHED_BOUND,
+    RUNNING,
+    STEP_TOO_SMALL,
+    StepControl,
+    arclength_run,
+)
 
-RUNNING, REACHED_BOUND, CAPACITY_FULL, STEP_TOO_SMALL, FOLDS_FOUND = 0, 1, 2, 3, 4
+FOLDS_FOUND = 4
 STATUS_MESSAGES = {
     RUNNING: "running",
     REACHED_BOUND: "reached the parameter bound",
@@ -89,14 +97,6 @@ def _bordered(H, g_lam, t):
     return jnp.vstack([jnp.hstack([H, g_lam[:, None]]), (w * t)[None, :]])
 
 
-def _corrector(z, data):
-    """The corrector's residual [F; <t, z - y_pred>] and its Jacobian, from one assembly."""
-    model, y_pred, t, args = data
-    m = z.shape[0] - 1
-    F, H, g_lam = model.linearisation(z[:-1], z[-1], args)
-    return jnp.append(F, _wdot(t, z - y_pred, m)), _bordered(H, g_lam, t)
-
-
 def _unit_tangent(B, m):
     """The solution t of B t = e_last, scaled to <t, t> = 1."""
     t = jnp.linalg.solve(B, jnp.zeros(B.shape[0], B.dtype).at[-1].set(1.0))
@@ -111,20 +111,55 @@ def _oriented_tangent(H, g_lam, direction):
     return jnp.sign(direction) * _unit_tangent(_bordered(H, g_lam, e), m)
 
 
-class _State(NamedTuple):
-    y: jax.Array
-    t: jax.Array
-    ds: jax.Array
-    k: jax.Array
-    rejected: jax.Array
-    folds: jax.Array
-    status: jax.Array
-    out: RawBranch
-
-
 def _spectrum(H):
     ev = jnp.linalg.eigvalsh(0.5 * (H + H.T))
     return ev[0], jnp.sum(ev < 0)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Equilibria:
+    """The equilibria F(x, lam) = grad_x E = 0 as a system of ``jaxrod.solvers.arclength``:
+    w = (x, lam), <a, b> = a_x . b_x / m + a_lam b_lam; a fold is a sign change of dlam/ds."""
+
+    model: EnergyModel
+    m: int
+    spectrum: bool
+    dtype: Any
+
+    @property
+    def weights(self):
+        return jnp.append(jnp.full(self.m, 1.0 / self.m, self.dtype), jnp.ones(1, self.dtype))
+
+    def inner(self, a, b):
+        return _wdot(a, b, self.m)
+
+    def linearise(self, z, aux, args):
+        F, H, g_lam = self.model.linearisation(z[:-1], z[-1], args)
+        return F, jnp.hstack([H, g_lam[:, None]])
+
+    def accepted(self, w, aux, J):
+        return aux, J
+
+    def record(self, out: RawBranch, k, w, t, J, res):
+        return _record(out, k, w, t, J[:, :self.m], res.iterations, res.residual_norm,
+                       self.spectrum)
+
+    def event(self, w, t, t_old, J, out, k_old):
+        return t[-1] * t_old[-1] < 0
+
+    def outside(self, w, opts):
+        return (w[-1] > opts.lam_max) | (w[-1] < opts.lam_min)
+
+
+def _record(out: RawBranch, k, y, t, H, iters, res, spectrum: bool) -> RawBranch:
+    lo, index = _spectrum(H) if spectrum else (jnp.nan, -1)
+    return out._replace(
+        x=out.x.at[k].set(y[:-1]), lam=out.lam.at[k].set(y[-1]),
+        tangent_lam=out.tangent_lam.at[k].set(t[-1]),
+        tangent_x=out.tangent_x.at[k].set(t[:-1]), min_eig=out.min_eig.at[k].set(lo),
+        morse_index=out.morse_index.at[k].set(index),
+        newton_iterations=out.newton_iterations.at[k].set(iters),
+        residual_norm=out.residual_norm.at[k].set(res))
 
 
 def pseudo_arclength(energy: Energy, x0: jax.Array, lam0, args: Any,
@@ -145,7 +180,8 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
 
     ``spectrum`` (static): record the Hessian's smallest eigenvalue and Morse index at every
     point (an eigendecomposition per step); without it ``min_eig`` stays NaN and
-    ``morse_index`` -1, for runs that only need the branch and its folds."""
+    ``morse_index`` -1, for runs that only need the branch and its folds. The steps are those
+    of ``jaxrod.solvers.arclength`` with the system of the equilibria."""
     model = as_model(energy)
     m = x0.shape[0]
     y0 = jnp.append(x0, lam0)
@@ -158,52 +194,13 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
         morse_index=jnp.full(capacity, -1), newton_iterations=jnp.full(capacity, -1),
         residual_norm=nan, num_points=jnp.asarray(0), status=jnp.asarray(RUNNING),
         rejected_steps=jnp.asarray(0))
-
-    def record(out: RawBranch, k, y, t, H, iters, res):
-        lo, index = _spectrum(H) if spectrum else (jnp.nan, -1)
-        return out._replace(
-            x=out.x.at[k].set(y[:-1]), lam=out.lam.at[k].set(y[-1]),
-            tangent_lam=out.tangent_lam.at[k].set(t[-1]),
-            tangent_x=out.tangent_x.at[k].set(t[:-1]), min_eig=out.min_eig.at[k].set(lo),
-            morse_index=out.morse_index.at[k].set(index),
-            newton_iterations=out.newton_iterations.at[k].set(iters),
-            residual_norm=out.residual_norm.at[k].set(res))
-
-    out = record(out, 0, y0, t0, H0, 0, jnp.max(jnp.abs(F0)))
-
-    def step(s: _State) -> _State:
-        y_pred = s.y + s.ds * s.t
-        res = newton(None, y_pred, (model, y_pred, s.t, args), tol=opts.tol,
-                     linearise=_corrector, keep_jacobian=True)
-        B = res.jacobian  # the corrector's Jacobian at its solution: [H F_lam; t^T W]
-        H = B[:m, :m]
-        t_new = _unit_tangent(B, m)
-        turn_ok = _wdot(t_new, s.t, m) > 0.9
-        accept = res.converged & turn_ok & jnp.all(jnp.isfinite(t_new))
-        k = s.k + jnp.where(accept, 1, 0)
-        new_out = jax.lax.cond(
-            accept, lambda o: record(o, k, res.x, t_new, H, res.iterations, res.residual_norm),
-            lambda o: o, s.out)
-        folds = s.folds + jnp.where(accept & (t_new[-1] * s.t[-1] < 0), 1, 0)
-        ds = jnp.where(accept,
-                       jnp.where(res.iterations <= 3, jnp.minimum(s.ds * opts.growth, opts.ds_max),
-                                 s.ds),
-                       0.5 * s.ds)
-        y = jnp.where(accept, res.x, s.y)
-        t = jnp.where(accept, t_new, s.t)
-        lam = y[-1]
-        status = jnp.where(accept & ((lam > opts.lam_max) | (lam < opts.lam_min)), REACHED_BOUND,
-                           jnp.where(folds >= opts.max_folds, FOLDS_FOUND,
-                                     jnp.where(k >= capacity - 1, CAPACITY_FULL,
-                                               jnp.where(ds < opts.ds_min, STEP_TOO_SMALL,
-                                                         RUNNING))))
-        return _State(y, t, ds, k, s.rejected + jnp.where(accept, 0, 1), folds, status, new_out)
-
-    init = _State(y0, t0, jnp.asarray(opts.ds, jnp.float64), jnp.asarray(0), jnp.asarray(0),
-                  jnp.asarray(0), jnp.asarray(RUNNING), out)
-    final = jax.lax.while_loop(lambda s: s.status == RUNNING, step, init)
-    return final.out._replace(num_points=final.k + 1, status=final.status,
-                              rejected_steps=final.rejected)
+    out = _record(out, 0, y0, t0, H0, 0, jnp.max(jnp.abs(F0)), spectrum)
+    control = StepControl(opts.ds, opts.ds_min, opts.ds_max, opts.growth, opts.tol,
+                          opts.max_folds)
+    out, num, status, rejected = arclength_run(
+        _Equilibria(model, m, spectrum, H0.dtype), args, y0, t0, None, out, control, opts, capacity,
+        FOLDS_FOUND)
+    return out._replace(num_points=num, status=status, rejected_steps=rejected)
 
 
 _pseudo_arclength = jit(continuation_run, static_argnums=(0, 5))

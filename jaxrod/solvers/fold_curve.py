@@ -49,6 +49,7 @@ full, or when the step collapses.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -56,12 +57,11 @@ import jax
 import jax.numpy as jnp
 
 from jaxrod.derivatives import EnergyModel
+from jaxrod.solvers.arclength import StepControl, arclength_run, unit_tangent
 from jaxrod.solvers.continuation import (
-    CAPACITY_FULL,
     REACHED_BOUND,
     RUNNING,
     STATUS_MESSAGES,
-    STEP_TOO_SMALL,
 )
 from jaxrod.solvers.folds import moore_spence_residual
 from jaxrod.solvers.newton import implicit_newton, newton
@@ -148,20 +148,6 @@ def _ell_row(ell):
     return jnp.concatenate([jnp.zeros(m, ell.dtype), ell, jnp.zeros(2, ell.dtype)])
 
 
-def _corrector(w, data):
-    w_pred, t, ell, model, args_at, args = data
-    R, J = fold_linearisation(w, ell, model, args_at, args)
-    W = _weights(ell.shape[0], w.dtype)
-    return (jnp.append(R, jnp.dot(W * t, w - w_pred)),
-            jnp.vstack([J, (W * t)[None, :]]))
-
-
-def _tangent(J, t_prev, W):
-    rhs = jnp.zeros(J.shape[1], J.dtype).at[-1].set(1.0)
-    t = jnp.linalg.solve(jnp.vstack([J, (W * t_prev)[None, :]]), rhs)
-    return t / jnp.sqrt(jnp.dot(W * t, t))
-
-
 def _unit_ell(phi):
     return phi / jnp.dot(phi, phi)
 
@@ -181,16 +167,53 @@ def _point_data(J, phi):
     return cubic / jnp.dot(phi, phi) ** 1.5, J[:m, 2 * m] @ phi, cubic, eigs
 
 
-class _State(NamedTuple):
-    w: jax.Array
-    t: jax.Array
-    ell: jax.Array
-    ds: jax.Array
-    k: jax.Array
-    rejected: jax.Array
-    cusps: jax.Array
-    status: jax.Array
-    out: RawFoldCurve
+@dataclasses.dataclass(frozen=True)
+class _FoldCurve:
+    """The folds in two parameters as a system of ``jaxrod.solvers.arclength``: w = (x, phi,
+    lam, u), <a, b> = (a_x . b_x + a_phi . b_phi) / m + a_lam b_lam + a_u b_u; aux = l, the
+    normalisation vector, re-set to phi / |phi|^2 at every accepted point; an event is a sign
+    change of the cusp test."""
+
+    model: EnergyModel
+    args_at: ArgsMap
+    m: int
+    dtype: Any
+
+    @property
+    def weights(self):
+        return _weights(self.m, self.dtype)
+
+    def inner(self, a, b):
+        return jnp.dot(self.weights * a, b)
+
+    def linearise(self, w, ell, args):
+        return fold_linearisation(w, ell, self.model, self.args_at, args)
+
+    def accepted(self, w, ell, J):
+        # the fold Jacobian at the new point: the corrector's, with the row of the new l
+        ell = _unit_ell(w[self.m:2 * self.m])
+        return ell, J.at[2 * self.m].set(_ell_row(ell))
+
+    def record(self, o: RawFoldCurve, k, w, t, J, res):
+        o = o._replace(w=o.w.at[k].set(w), tangent=o.tangent.at[k].set(t),
+                       newton_iterations=o.newton_iterations.at[k].set(res.iterations),
+                       residual_norm=o.residual_norm.at[k].set(res.residual_norm))
+        return _record_data(o, k, J, w[self.m:2 * self.m])
+
+    def event(self, w, t, t_old, J, out, k_old):
+        return _cusp_test(J, w[self.m:2 * self.m]) * out.cusp_test[k_old] < 0
+
+    def outside(self, w, opts):
+        lam, u = w[2 * self.m], w[2 * self.m + 1]
+        return (u > opts.u_max) | (u < opts.u_min) | (lam > opts.lam_max) | (lam < opts.lam_min)
+
+
+def _record_data(o: RawFoldCurve, k, J, phi):
+    test, lam_d, cubic, eigs = _point_data(J, phi)
+    return o._replace(cusp_test=o.cusp_test.at[k].set(test),
+                      lam_derivative=o.lam_derivative.at[k].set(lam_d),
+                      cubic_form=o.cubic_form.at[k].set(cubic),
+                      smallest_eigenvalues=o.smallest_eigenvalues.at[k].set(eigs))
 
 
 def fold_curve_run(model: EnergyModel, args_at: ArgsMap, w0, args, opts: FoldCurveOptions,
@@ -198,24 +221,17 @@ def fold_curve_run(model: EnergyModel, args_at: ArgsMap, w0, args, opts: FoldCur
     """Follow the fold curve through the fold w0 = (x, phi, lam, u) (traceable; ``capacity``
     static; vmappable over w0 and ``direction``, the sign of du on the first step).
 
-    w0 must be a converged fold (its phi any nonzero null vector).
+    w0 must be a converged fold (its phi any nonzero null vector). The steps are those of
+    ``jaxrod.solvers.arclength`` with the fold system.
     """
     m = (w0.shape[0] - 2) // 2
-    W = _weights(m, w0.dtype)
+    system = _FoldCurve(model, args_at, m, w0.dtype)
     ell0 = _unit_ell(w0[m:2 * m])
     R0, J0 = fold_linearisation(w0, ell0, model, args_at, args)
     e_u = jnp.zeros_like(w0).at[-1].set(1.0)
-    t0 = _tangent(J0, e_u, W)
+    t0 = unit_tangent(system, J0, e_u)
     t0 = jnp.where(t0[-1] * direction < 0, -t0, t0)
     nan = jnp.full(capacity, jnp.nan, w0.dtype)
-
-    def record_data(o: RawFoldCurve, k, J, phi):
-        test, lam_d, cubic, eigs = _point_data(J, phi)
-        return o._replace(cusp_test=o.cusp_test.at[k].set(test),
-                          lam_derivative=o.lam_derivative.at[k].set(lam_d),
-                          cubic_form=o.cubic_form.at[k].set(cubic),
-                          smallest_eigenvalues=o.smallest_eigenvalues.at[k].set(eigs))
-
     out = RawFoldCurve(
         w=jnp.full((capacity, w0.shape[0]), jnp.nan, w0.dtype).at[0].set(w0),
         tangent=jnp.full((capacity, w0.shape[0]), jnp.nan, w0.dtype).at[0].set(t0),
@@ -224,48 +240,12 @@ def fold_curve_run(model: EnergyModel, args_at: ArgsMap, w0, args, opts: FoldCur
         newton_iterations=jnp.full(capacity, -1).at[0].set(0),
         residual_norm=nan.at[0].set(jnp.max(jnp.abs(R0))), num_points=jnp.asarray(0),
         status=jnp.asarray(RUNNING), rejected_steps=jnp.asarray(0))
-    out = record_data(out, 0, J0, w0[m:2 * m])
-
-    def step(s: _State) -> _State:
-        w_pred = s.w + s.ds * s.t
-        res = newton(None, w_pred, (w_pred, s.t, s.ell, model, args_at, args), tol=opts.tol,
-                     linearise=_corrector, keep_jacobian=True)
-        ell = _unit_ell(res.x[m:2 * m])
-        # the fold Jacobian at the new point: the corrector's, less its arclength row, with
-        # the normalisation row of the new l
-        J = res.jacobian[:-1].at[2 * m].set(_ell_row(ell))
-        t_new = _tangent(J, s.t, W)
-        accept = res.converged & (jnp.dot(W * t_new, s.t) > 0.9) & jnp.all(jnp.isfinite(t_new))
-        k = s.k + jnp.where(accept, 1, 0)
-        test = _cusp_test(J, res.x[m:2 * m])
-        cusps = s.cusps + jnp.where(accept & (test * s.out.cusp_test[s.k] < 0), 1, 0)
-
-        def record(o: RawFoldCurve):
-            o = o._replace(w=o.w.at[k].set(res.x), tangent=o.tangent.at[k].set(t_new),
-                           newton_iterations=o.newton_iterations.at[k].set(res.iterations),
-                           residual_norm=o.residual_norm.at[k].set(res.residual_norm))
-            return record_data(o, k, J, res.x[m:2 * m])
-
-        out = jax.lax.cond(accept, record, lambda o: o, s.out)
-        ds = jnp.where(accept, jnp.where(res.iterations <= 3,
-                                         jnp.minimum(s.ds * opts.growth, opts.ds_max), s.ds),
-                       0.5 * s.ds)
-        w = jnp.where(accept, res.x, s.w)
-        lam, u = w[2 * m], w[2 * m + 1]
-        outside = (u > opts.u_max) | (u < opts.u_min) | (lam > opts.lam_max) | (lam < opts.lam_min)
-        status = jnp.where(accept & outside, REACHED_BOUND,
-                           jnp.where(cusps >= opts.max_cusps, CUSP_PASSED,
-                                     jnp.where(k >= capacity - 1, CAPACITY_FULL,
-                                               jnp.where(ds < opts.ds_min, STEP_TOO_SMALL,
-                                                         RUNNING))))
-        return _State(w, jnp.where(accept, t_new, s.t), jnp.where(accept, ell, s.ell), ds, k,
-                      s.rejected + jnp.where(accept, 0, 1), cusps, status, out)
-
-    init = _State(w0, t0, ell0, jnp.asarray(opts.ds, w0.dtype), jnp.asarray(0), jnp.asarray(0),
-                  jnp.asarray(0), jnp.asarray(RUNNING), out)
-    final = jax.lax.while_loop(lambda s: s.status == RUNNING, step, init)
-    return final.out._replace(num_points=final.k + 1, status=final.status,
-                              rejected_steps=final.rejected)
+    out = _record_data(out, 0, J0, w0[m:2 * m])
+    control = StepControl(opts.ds, opts.ds_min, opts.ds_max, opts.growth, opts.tol,
+                          opts.max_cusps)
+    out, num, status, rejected = arclength_run(system, args, w0, t0, ell0, out, control, opts,
+                                               capacity, CUSP_PASSED)
+    return out._replace(num_points=num, status=status, rejected_steps=rejected)
 
 
 def quadratic_coefficient(w, model: EnergyModel, args_at: ArgsMap, args):
