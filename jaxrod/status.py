@@ -15,8 +15,11 @@ import numpy as np
 
 
 class Status(enum.IntEnum):
-    """What a solver or an analysis ended with. ``ok`` says whether the result is usable."""
+    """What a solver or an analysis ended with. ``ok`` says whether the result is usable;
+    ``str(status)`` is its message. Newton's codes are 0-3, a curve's (continuation, fold
+    curve) 4-8; RUNNING (-1) marks a loop that has not stopped."""
 
+    RUNNING = -1
     SUCCESS = 0
     MAX_STEPS = 1
     NONFINITE = 2
@@ -38,11 +41,15 @@ class Status(enum.IntEnum):
     def message(self) -> str:
         return MESSAGES[self]
 
+    def __str__(self) -> str:
+        return MESSAGES[self]
+
 
 _OK = {Status.SUCCESS, Status.REACHED_BOUND, Status.FOLDS_FOUND, Status.CUSP_PASSED,
        Status.SNAPPED_WHILE_LOADING}
 
 MESSAGES = {
+    Status.RUNNING: "running",
     Status.SUCCESS: "converged",
     Status.MAX_STEPS: "the iteration budget ran out before convergence: the start may be far "
     "from a solution or the solution sits at a fold (singular Jacobian); try a start closer "
@@ -51,13 +58,14 @@ MESSAGES = {
     "branch point) or inputs out of range; check the inputs, or start away from the fold",
     Status.LINE_SEARCH_FAILED: "no step length reduced the residual: stuck at a local minimum "
     "of the residual; try another start",
-    Status.REACHED_BOUND: "reached the end of the range",
-    Status.FOLDS_FOUND: "passed the number of folds asked for",
-    Status.CAPACITY_FULL: "stopped before the end of the range: the branch's capacity was "
-    "full; raise max_points or the largest step",
+    Status.REACHED_BOUND: "reached the end of the range (of the varied input, or of the "
+    "magnet angle)",
+    Status.FOLDS_FOUND: "passed the number of folds asked for (max_folds)",
+    Status.CAPACITY_FULL: "stopped before the end of the range: max_points reached (raise "
+    "max_points or ds_max)",
     Status.STEP_TOO_SMALL: "stopped before the end of the range: the corrector failed even at "
-    "the smallest step (a branch point, a singular system or too coarse a discretisation); "
-    "try a larger N or a smaller smallest step",
+    "the minimum step ds_min (a branch point, a singular bordered Jacobian or too coarse a "
+    "discretisation); try a larger N or a smaller ds_min",
     Status.CUSP_PASSED: "ended at a cusp (the fold curve turns back there)",
     Status.SNAPPED_WHILE_LOADING: "the loads, ramped from zero, passed a fold: the rod snapped "
     "on the way and the state is the one it snapped to (continue from a given state for "

@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+import jaxrod as jr
 from jaxrod.magnet import diagram as magnet
 from jaxrod.magnet import folds as magnet_folds
 from jaxrod.three_d.track import trace_track
@@ -44,7 +45,7 @@ def test_magnet_track_leaving_the_plane_snaps_where_the_planar_folds_are():
     scene = magnet.make_scene(2.2, 0.0236, D)
     planar = {f.kind: f.alpha_deg for f in magnet_folds.locate_folds(scene, n=16).folds}
     track = trace_track(scene, alpha0_deg=20.0, tilt_deg=90.0, n=16)
-    assert track.status == "reached the parameter bound"
+    assert track.status is jr.Status.REACHED_BOUND
     assert track.out_of_plane.max() > 0.5  # genuinely 3D states
     upper, lower = track.folds  # the branch runs round the upper fold, then the lower one
     for fold, kind in ((upper, "upper"), (lower, "lower")):

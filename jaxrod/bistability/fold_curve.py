@@ -23,8 +23,8 @@ from jaxrod.equilibria.folds import Fold, folds
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.scene import Input, Scene
-from jaxrod.solvers.continuation import STATUS_MESSAGES
-from jaxrod.solvers.fold_curve import CURVE_STATUS, FoldCurveOptions, fold_curve_run, split
+from jaxrod.solvers.fold_curve import FoldCurveOptions, fold_curve_run, split
+from jaxrod.status import Status
 
 CAPACITY = 400
 
@@ -56,7 +56,7 @@ class FoldCurve:
     values: np.ndarray
     tip_angle_deg: np.ndarray
     cusp_test: np.ndarray
-    status: tuple[str, ...]
+    status: tuple[Status, ...]
     start: Fold
 
     @property
@@ -140,7 +140,7 @@ def fold_curve(scene: Scene, vary: str, vary_range: tuple[float, float], along: 
                 np.degrees(angle[i, :k]), runs.cusp_test[i, :k]]
         cols = [c[::-1] if rev else c for c in cols]
         parts.append([c[:-1] if rev else c for c in cols])  # the start point once
-        status.append((CURVE_STATUS | STATUS_MESSAGES)[int(runs.status[i])])
+        status.append(Status(int(runs.status[i])))
     cat = [np.concatenate([p[j] for p in parts]) for j in range(4)]
     return FoldCurve(vary=vary, along=along, along_values=cat[0], values=cat[1],
                      tip_angle_deg=cat[2], cusp_test=cat[3], status=tuple(status), start=f)

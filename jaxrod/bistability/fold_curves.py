@@ -42,7 +42,6 @@ from jaxrod.params import (
 )
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
 from jaxrod.solvers.fold_curve import (
-    CURVE_STATUS,
     FoldCurveOptions,
     cubic_coefficient,
     differentiable_cusp,
@@ -54,6 +53,7 @@ from jaxrod.solvers.fold_curve import (
     split,
 )
 from jaxrod.solvers.folds import fold_coefficients
+from jaxrod.status import Status
 from jaxrod.stored import StoredProgram
 
 
@@ -157,7 +157,7 @@ class FoldCurve:
     hessian_smallest: np.ndarray  # (n, 2)
     newton_iterations: np.ndarray
     residual_norm: np.ndarray
-    status: str
+    status: Status
     reaches_cusp: bool
 
     def columns(self) -> dict[str, np.ndarray]:
@@ -183,7 +183,7 @@ class FoldCurves:
 
     @property
     def converged(self) -> bool:
-        good = all(c.status in (CURVE_STATUS[1], CURVE_STATUS[5]) for c in self.curves)
+        good = all(c.status in (Status.REACHED_BOUND, Status.CUSP_PASSED) for c in self.curves)
         return good and (self.cusp is None or self.cusp.converged) and all(
             e.converged for e in self.events)
 
@@ -193,7 +193,7 @@ class FoldCurves:
                 "events": [e.kind for e in self.events],
                 "event_points": [e.as_dict() for e in self.events],
                 "curves": {c.start: {k: v.tolist() for k, v in c.columns().items()}
-                           | {"status": c.status, "reaches_cusp": c.reaches_cusp}
+                           | {"status": str(c.status), "reaches_cusp": c.reaches_cusp}
                            for c in self.curves},
                 "converged": self.converged}
 
@@ -277,7 +277,7 @@ def _curve_from(run, observed, i, start, v0) -> tuple[FoldCurve, int | None]:
         d2F_dq2=d_qq[:cut], hessian_smallest=eigs[:cut],
         newton_iterations=np.asarray(run.newton_iterations[i][:cut]),
         residual_norm=np.asarray(run.residual_norm[i][:cut]),
-        status=CURVE_STATUS[int(run.status[i])], reaches_cusp=bool(change.size))
+        status=Status(int(run.status[i])), reaches_cusp=bool(change.size))
     near = None
     if change.size:
         j = int(change[0])
@@ -375,7 +375,7 @@ def trace_fold_curve(point: DesignPoint, vary: str, between: tuple[float, float]
         cusps.append(_refine("cusp", runs.w[0][near], 0.0, disc, vary_map, base, vary, v0,
                              "cusp"))
     u, alpha = np.asarray(observed[0][0][:k]), np.asarray(observed[1][0][:k])
-    return v0 * (1.0 + u), np.degrees(alpha), cusps, CURVE_STATUS[int(runs.status[0])]
+    return v0 * (1.0 + u), np.degrees(alpha), cusps, Status(int(runs.status[0]))
 
 
 #: How far ``find_cusp`` looks: the varied input within a factor 20 of its start.

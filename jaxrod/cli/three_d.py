@@ -64,7 +64,7 @@ def cmd_track(args) -> int:
               "hessian_smallest": list(f.hessian_smallest), "converged": f.converged,
               "residual_norm": f.residual_norm} for f in track.folds]
     out = info | {"n": args.n, "alpha0_deg": args.alpha0, "tilt_deg": args.tilt,
-                  "t_max_deg": args.t_max, "status": track.status, "points": len(track.t_deg),
+                  "t_max_deg": args.t_max, "status": str(track.status), "points": len(track.t_deg),
                   "max_out_of_plane": float(track.out_of_plane.max()), "folds": folds,
                   "converged": all(f["converged"] for f in folds)}
     if path is not None:

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxrod.solvers.continuation import STATUS_MESSAGES, RawBranch
+from jaxrod.solvers.continuation import RawBranch
+from jaxrod.status import Status
 
 
 @dataclasses.dataclass(frozen=True)
@@ -24,7 +25,7 @@ class Branch:
       min_eig, morse_index: smallest Hessian eigenvalue and number of negative ones.
       tangent_value: parameter component of the unit tangent (changes sign at folds).
       newton_iterations, residual_norm: corrector diagnostics per point.
-      status: why each traced segment stopped.
+      status: why each traced segment stopped (``jaxrod.Status``; str() is the message).
       vary: the varied input's key; tip_position: X = int d3 per point (generic scenes).
     """
 
@@ -38,7 +39,7 @@ class Branch:
     tangent_value: np.ndarray
     newton_iterations: np.ndarray
     residual_norm: np.ndarray
-    status: tuple[str, ...]
+    status: tuple[Status, ...]
     complete: bool
     vary: str = "magnet.alpha"
     tip_position: np.ndarray | None = None
@@ -131,8 +132,9 @@ def branch_from_runs(runs: list[tuple[RawBranch, bool, tuple]]) -> Branch:
             fields = {f: v[::-1] for f, v in fields.items()}
             fields["tangent_lam"] = -fields["tangent_lam"]
         parts.append(fields)
-        status.append(STATUS_MESSAGES[int(raw.status)])
-        complete &= int(raw.status) in (1, 4)  # reached the bound, or the folds asked for
+        code = Status(int(raw.status))
+        status.append(code)
+        complete &= code in (Status.REACHED_BOUND, Status.FOLDS_FOUND)
     # runs share their starting point: drop the duplicate
     if len(parts) == 2:
         parts[1] = {f: v[1:] for f, v in parts[1].items()}

@@ -38,8 +38,10 @@ import jax
 import jax.numpy as jnp
 
 from jaxrod.solvers.newton import newton
+from jaxrod.status import Status
 
-RUNNING, REACHED_BOUND, CAPACITY_FULL, STEP_TOO_SMALL = 0, 1, 2, 3
+RUNNING, REACHED_BOUND, CAPACITY_FULL, STEP_TOO_SMALL = (
+    Status.RUNNING, Status.REACHED_BOUND, Status.CAPACITY_FULL, Status.STEP_TOO_SMALL)
 
 
 class StepControl(NamedTuple):
@@ -104,16 +106,16 @@ def arclength_run(system, data, w0, t0, aux0, out0, control: StepControl, option
                                          s.ds),
                        0.5 * s.ds)
         w = jnp.where(accept, res.x, s.w)
-        status = jnp.where(accept & system.outside(w, options), REACHED_BOUND,
-                           jnp.where(events >= control.max_events, event_status,
-                                     jnp.where(k >= capacity - 1, CAPACITY_FULL,
-                                               jnp.where(ds < control.ds_min, STEP_TOO_SMALL,
-                                                         RUNNING))))
+        status = jnp.where(accept & system.outside(w, options), int(REACHED_BOUND),
+                           jnp.where(events >= control.max_events, int(event_status),
+                                     jnp.where(k >= capacity - 1, int(CAPACITY_FULL),
+                                               jnp.where(ds < control.ds_min,
+                                                         int(STEP_TOO_SMALL), int(RUNNING)))))
         aux = jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), aux, s.aux)
         return _State(w, jnp.where(accept, t_new, s.t), aux, ds, k,
                       s.rejected + jnp.where(accept, 0, 1), events, status, out)
 
     init = _State(w0, t0, aux0, jnp.asarray(control.ds, w0.dtype), jnp.asarray(0),
-                  jnp.asarray(0), jnp.asarray(0), jnp.asarray(RUNNING), out0)
-    final = jax.lax.while_loop(lambda s: s.status == RUNNING, step, init)
+                  jnp.asarray(0), jnp.asarray(0), jnp.asarray(int(RUNNING)), out0)
+    final = jax.lax.while_loop(lambda s: s.status == int(RUNNING), step, init)
     return final.out, final.k + 1, final.status, final.rejected

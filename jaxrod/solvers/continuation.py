@@ -39,17 +39,12 @@ from jaxrod.solvers.arclength import (
     StepControl,
     arclength_run,
 )
+from jaxrod.status import Status
 
-FOLDS_FOUND = 4
-STATUS_MESSAGES = {
-    RUNNING: "running",
-    REACHED_BOUND: "reached the parameter bound",
-    FOLDS_FOUND: "passed max_folds folds",
-    CAPACITY_FULL: "stopped: max_points reached before the parameter bound (raise max_points "
-    "or ds_max)",
-    STEP_TOO_SMALL: "stopped: the corrector failed even at the minimum step ds_min (a branch "
-    "point, a singular bordered Jacobian or a too-coarse discretisation)",
-}
+FOLDS_FOUND = Status.FOLDS_FOUND
+#: The messages of a run's codes (``jaxrod.status.Status``).
+STATUS_MESSAGES = {int(c): c.message for c in (RUNNING, REACHED_BOUND, FOLDS_FOUND,
+                                                CAPACITY_FULL, STEP_TOO_SMALL)}
 
 #: An ``EnergyModel`` (assembled derivatives) or a plain energy function E(x, lam, args).
 Energy = EnergyModel | Callable[[jax.Array, jax.Array, Any], jax.Array]
@@ -192,7 +187,7 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
         x=jnp.full((capacity, m), jnp.nan), lam=nan, tangent_lam=nan,
         tangent_x=jnp.full((capacity, m), jnp.nan), min_eig=nan,
         morse_index=jnp.full(capacity, -1), newton_iterations=jnp.full(capacity, -1),
-        residual_norm=nan, num_points=jnp.asarray(0), status=jnp.asarray(RUNNING),
+        residual_norm=nan, num_points=jnp.asarray(0), status=jnp.asarray(int(RUNNING)),
         rejected_steps=jnp.asarray(0))
     out = _record(out, 0, y0, t0, H0, 0, jnp.max(jnp.abs(F0)), spectrum)
     control = StepControl(opts.ds, opts.ds_min, opts.ds_max, opts.growth, opts.tol,

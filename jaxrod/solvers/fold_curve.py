@@ -59,18 +59,16 @@ import jax.numpy as jnp
 from jaxrod.derivatives import EnergyModel
 from jaxrod.solvers.arclength import StepControl, arclength_run, unit_tangent
 from jaxrod.solvers.continuation import (
-    REACHED_BOUND,
     RUNNING,
     STATUS_MESSAGES,
 )
 from jaxrod.solvers.folds import moore_spence_residual
 from jaxrod.solvers.newton import implicit_newton, newton
+from jaxrod.status import Status
 
-CUSP_PASSED = 5
-CURVE_STATUS = STATUS_MESSAGES | {
-    CUSP_PASSED: "ended at a cusp (the fold curve turns back there)",
-    REACHED_BOUND: "reached the end of the range (of the varied input, or of the magnet "
-    "angle)"}
+CUSP_PASSED = Status.CUSP_PASSED
+#: The messages of a fold-curve run's codes (``jaxrod.status.Status``).
+CURVE_STATUS = STATUS_MESSAGES | {int(CUSP_PASSED): CUSP_PASSED.message}
 
 #: ``args_at(u, args) -> model args``: how the second parameter enters the energy (a
 #: hashable, module-level function or frozen dataclass, so compiled programs are reused).
@@ -239,7 +237,7 @@ def fold_curve_run(model: EnergyModel, args_at: ArgsMap, w0, args, opts: FoldCur
         smallest_eigenvalues=jnp.full((capacity, 2), jnp.nan, w0.dtype),
         newton_iterations=jnp.full(capacity, -1).at[0].set(0),
         residual_norm=nan.at[0].set(jnp.max(jnp.abs(R0))), num_points=jnp.asarray(0),
-        status=jnp.asarray(RUNNING), rejected_steps=jnp.asarray(0))
+        status=jnp.asarray(int(RUNNING)), rejected_steps=jnp.asarray(0))
     out = _record_data(out, 0, J0, w0[m:2 * m])
     control = StepControl(opts.ds, opts.ds_min, opts.ds_max, opts.growth, opts.tol,
                           opts.max_cusps)

@@ -26,16 +26,13 @@ from typing import Any, NamedTuple
 import jax
 import jax.numpy as jnp
 
-CONVERGED, MAX_STEPS, NONFINITE, LINE_SEARCH_FAILED = 0, 1, 2, 3
-STATUS_MESSAGES = {
-    CONVERGED: "converged",
-    MAX_STEPS: "maximum number of Newton steps reached without convergence; the initial guess "
-    "may be far from a solution, or the solution may sit at a fold (singular Jacobian)",
-    NONFINITE: "the residual or the Newton step became NaN/inf; the Jacobian is probably "
-    "singular (a fold or bifurcation point) or the parameters are out of range",
-    LINE_SEARCH_FAILED: "no step length reduced the residual; the iterate is stuck at a local "
-    "minimum of |F| or the Jacobian is inaccurate",
-}
+from jaxrod.status import Status
+
+CONVERGED, MAX_STEPS, NONFINITE, LINE_SEARCH_FAILED = (
+    Status.SUCCESS, Status.MAX_STEPS, Status.NONFINITE, Status.LINE_SEARCH_FAILED)
+#: The messages of Newton's codes (``jaxrod.status.Status``).
+STATUS_MESSAGES = {int(c): c.message for c in (CONVERGED, MAX_STEPS, NONFINITE,
+                                                LINE_SEARCH_FAILED)}
 
 
 class NewtonResult(NamedTuple):
@@ -51,7 +48,7 @@ class NewtonResult(NamedTuple):
 
     def message(self) -> str:
         """Human-readable status (host side)."""
-        return STATUS_MESSAGES[int(self.status)]
+        return Status(int(self.status)).message
 
 
 class _State(NamedTuple):

@@ -36,9 +36,10 @@ from jaxrod.params import check, check_degree
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet
 from jaxrod.scenes.three_d import DipoleMagnet3D, magnet_position
-from jaxrod.solvers.continuation import STATUS_MESSAGES, ContinuationOptions, continuation_run
+from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.descent import descend
 from jaxrod.solvers.folds import moore_spence_solve
+from jaxrod.status import Status
 
 
 @jax.tree_util.register_dataclass
@@ -134,7 +135,7 @@ class TrackBranch:
     states: np.ndarray
     min_eig: np.ndarray
     stable: np.ndarray
-    status: str
+    status: Status
     folds: tuple[TrackFold, ...]
     n: int
 
@@ -203,5 +204,5 @@ def trace_track(scene: DipoleMagnet, alpha0_deg: float = 20.0, tilt_deg: float =
     return TrackBranch(
         t_deg=np.degrees(t), magnet=np.asarray(jax.vmap(track.position)(jnp.asarray(t))),
         tip=np.asarray(tips)[:k], states=x, min_eig=np.asarray(raw.min_eig)[:k],
-        stable=np.asarray(raw.morse_index)[:k] == 0, status=STATUS_MESSAGES[int(raw.status)],
+        stable=np.asarray(raw.morse_index)[:k] == 0, status=Status(int(raw.status)),
         folds=tuple(folds), n=n)
