@@ -24,7 +24,8 @@ import jax.numpy as jnp
 
 from jaxrod.derivatives import Structured
 from jaxrod.discretise.planar import PlanarDiscretisation
-from jaxrod.scenes.functionals import bending_energy, gravity_energy
+from jaxrod.scenes.scene import Scene
+from jaxrod.scenes.terms import Bending, Dipole, Gravity
 
 
 def magnet_direction(alpha):
@@ -77,22 +78,27 @@ class DipoleMagnet:
     D: jax.Array | float
     alpha: jax.Array | float
 
+    @property
+    def scene(self) -> Scene:
+        """The same energy as a scene of terms: bending, gravity and the dipole."""
+        return Scene({"bending": Bending(), "gravity": Gravity(self.G),
+                      "magnet": Dipole(self.M, self.D, self.alpha)})
+
+    # the structure jaxrod.derivatives.Structured assembles, from the terms
     def density(self, a, s):
-        """Energy density at one node, a = (theta, theta'): theta'^2 / 2 + G (1 - s) cos."""
-        return 0.5 * a[1] ** 2 + self.G * (1.0 - s) * jnp.cos(a[0])
+        """theta'^2 / 2 + G (1 - s) cos(theta) at one node (the terms' densities)."""
+        return self.scene.density(a, s)
 
     def tip_map(self, a):
-        """Integrand of the tip position, d3 = (sin theta, cos theta)."""
-        return jnp.stack([jnp.sin(a[0]), jnp.cos(a[0])])
+        """Integrand of the tip position, d3 = (sin theta, 0, cos theta)."""
+        return self.scene.tip_map(a)
 
     def endpoint(self, X):
         """M Phi_alpha(X)."""
-        return self.M * dipole_potential(X, magnet_direction(self.alpha), self.D)
+        return self.scene.endpoint(X)
 
     def energy(self, theta: jax.Array, disc: PlanarDiscretisation) -> jax.Array:
-        X = tip_position(theta, disc)
-        return (bending_energy(theta, disc) + gravity_energy(theta, disc, self.G)
-                + self.M * dipole_potential(X, magnet_direction(self.alpha), self.D))
+        return self.scene.energy(theta, disc)
 
     def with_alpha(self, alpha) -> DipoleMagnet:
         return dataclasses.replace(self, alpha=alpha)

@@ -81,19 +81,37 @@ class Scene:
         return [t for t in self.terms.values() if getattr(t, kind) is not None]
 
     def density(self, a, s):
-        """Sum of the density terms at one node, from the jet a."""
+        """Sum of the density terms at one node, from the jet a (on the planar rod, a term's
+        ``planar`` form where it has one)."""
+        terms = self._of_kind("density")
+        planar = self.geometry == "planar"
+        if planar and all(t.planar is not None for t in terms):
+            return sum(self._scale(t) * t.planar(a[0], a[1], s) for t in terms)
         d3, dd3 = self._jet(a)
-        return sum(self._scale(t) * t.density(d3, dd3, s) for t in self._of_kind("density"))
+        return sum(self._scale(t) * (t.planar(a[0], a[1], s) if planar and t.planar is not None
+                                     else t.density(d3, dd3, s)) for t in terms)
+
+    @property
+    def _planar_tip(self) -> bool:
+        """The tip as (X1, X3): a planar rod whose endpoint terms all have a planar form."""
+        return self.geometry == "planar" and all(
+            t.planar_endpoint is not None for t in self._of_kind("endpoint"))
 
     @property
     def tip_map(self):
-        """The integrand d3(a) of the tip position, or None without endpoint terms."""
+        """The integrand of the tip position, d3(a) (or its in-plane components (sin theta,
+        cos theta) on the planar rod when every endpoint term has a planar form), or None
+        without endpoint terms."""
         if not self._of_kind("endpoint"):
             return None
+        if self._planar_tip:
+            return lambda a: jnp.stack([jnp.sin(a[0]), jnp.cos(a[0])])
         return lambda a: self._jet(a)[0]
 
     def endpoint(self, X):
-        """Sum of the endpoint potentials at the tip X."""
+        """Sum of the endpoint potentials at the tip X (``tip_map``'s components)."""
+        if self._planar_tip:
+            return sum(self._scale(t) * t.planar_endpoint(X) for t in self._of_kind("endpoint"))
         return sum(self._scale(t) * t.endpoint(X) for t in self._of_kind("endpoint"))
 
     @property

@@ -15,10 +15,10 @@ from __future__ import annotations
 import dataclasses
 
 import jax
-import jax.numpy as jnp
 
 from jaxrod.discretise.planar import PlanarDiscretisation
-from jaxrod.scenes.functionals import anisotropy_energy, bending_energy, gravity_energy
+from jaxrod.scenes.scene import Scene
+from jaxrod.scenes.terms import Anisotropy, Bending, Gravity
 
 
 @jax.tree_util.register_dataclass
@@ -35,12 +35,15 @@ class UniformField:
 
     tip_map = None  # no endpoint term (``jaxrod.derivatives``)
 
+    @property
+    def scene(self) -> Scene:
+        """The same energy as a scene of terms: bending, gravity and the anisotropy."""
+        return Scene({"bending": Bending(), "gravity": Gravity(self.G),
+                      "field": Anisotropy(self.A)})
+
     def density(self, a, s):
-        """Energy density at one node, a = (theta, theta'):
-        theta'^2 / 2 + G (1 - s) cos(theta) + A sin(theta)^2 / 2."""
-        return 0.5 * a[1] ** 2 + self.G * (1.0 - s) * jnp.cos(a[0]) \
-            + 0.5 * self.A * jnp.sin(a[0]) ** 2
+        """theta'^2 / 2 + G (1 - s) cos(theta) + A sin(theta)^2 / 2 (the terms' densities)."""
+        return self.scene.density(a, s)
 
     def energy(self, theta: jax.Array, disc: PlanarDiscretisation) -> jax.Array:
-        return (bending_energy(theta, disc) + gravity_energy(theta, disc, self.G)
-                + anisotropy_energy(theta, disc, self.A))
+        return self.scene.energy(theta, disc)

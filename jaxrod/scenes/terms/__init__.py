@@ -14,7 +14,11 @@ never recompiles) that contributes to the nondimensional energy through one or m
                           tangent): differentiated by autodiff as a whole.
 
 Terms are written in the director, so one term serves the planar rod (d3 = sin(theta) e1 +
-cos(theta) e3) and the 3D rod alike. ``elastic = True`` marks the rod's own energy (the
+cos(theta) e3) and the 3D rod alike. A density term may add ``planar(theta, theta', s)``, the
+same density on the planar rod written in theta (the compiled derivative programs are then
+smaller: no sin^2 + cos^2 to carry through three derivatives), and an endpoint term
+``planar_endpoint(X)`` of the in-plane tip (X1, X3); tests/test_engine.py checks that the
+forms agree. ``elastic = True`` marks the rod's own energy (the
 bending term), which the load ramp of ``jaxrod.equilibria`` does not scale.
 
 A new term is one file with a class decorated by ``@term("name")`` (this registers it in
@@ -38,7 +42,7 @@ def term(name: str):
     The class defines ``density``, ``endpoint`` and/or ``distributed`` (module docstring);
     the ones it does not define stay ``None``."""
     def register(cls):
-        for kind in ("density", "endpoint", "distributed"):
+        for kind in ("density", "endpoint", "distributed", "planar", "planar_endpoint"):
             if not hasattr(cls, kind):
                 setattr(cls, kind, None)
         if not hasattr(cls, "elastic"):

@@ -27,3 +27,10 @@ class Anisotropy:
         """A |d3 x h|^2 / 2."""
         c = jnp.cross(d3, self.direction)
         return 0.5 * self.A * jnp.dot(c, c)
+
+    def planar(self, theta, dtheta, s):
+        """The density on the planar rod: with h = (h1, h2, h3) and d3 = (sin, 0, cos),
+        |d3 x h|^2 = (cos h2)^2 + (cos h1 - sin h3)^2 + (sin h2)^2."""
+        h = self.direction
+        sn, cs = jnp.sin(theta), jnp.cos(theta)
+        return 0.5 * self.A * (h[1] ** 2 + (cs * h[0] - sn * h[2]) ** 2)

@@ -18,3 +18,7 @@ class Bending:
 
     def density(self, d3, dd3, s):
         return 0.5 * jnp.dot(dd3, dd3)
+
+    def planar(self, theta, dtheta, s):
+        """The density on the planar rod: theta'^2 / 2."""
+        return 0.5 * dtheta**2

@@ -25,3 +25,8 @@ class Gravity:
     def density(self, d3, dd3, s):
         """-G (1 - s) d3 . g (= G (1 - s) cos(theta) for g = -e3)."""
         return -self.G * (1.0 - s) * jnp.dot(d3, self.direction)
+
+    def planar(self, theta, dtheta, s):
+        """The density on the planar rod, d3 = (sin theta, 0, cos theta)."""
+        g = self.direction
+        return -self.G * (1.0 - s) * (jnp.sin(theta) * g[0] + jnp.cos(theta) * g[2])
