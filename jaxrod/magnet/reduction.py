@@ -54,6 +54,7 @@ from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
 from jaxrod.scenes.functionals import bending_energy
 from jaxrod.solvers import dense
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
+from jaxrod.solvers.eigen import smallest_generalised_eigenvalue
 from jaxrod.solvers.newton import implicit_newton, newton
 from jaxrod.stored import StoredProgram
 
@@ -80,10 +81,7 @@ def poincare_mean_zero(disc: PlanarDiscretisation) -> jax.Array:
     Z = mean_zero_basis(disc)
     K = Z.T @ stiffness_matrix(disc) @ Z
     M = Z.T @ disc.mass_matrix() @ Z
-    L = jnp.linalg.cholesky(M)
-    solve_l = lambda b: jax.scipy.linalg.solve_triangular(L, b, lower=True)
-    C = solve_l(solve_l(K).T).T
-    return jnp.linalg.eigvalsh(0.5 * (C + C.T))[0]
+    return smallest_generalised_eigenvalue(K, M)
 
 
 def b0_matrix(G, M, D, disc: PlanarDiscretisation) -> jax.Array:
@@ -402,10 +400,7 @@ def second_variation_checks(q, alpha, red: Reduction, scene: DipoleMagnet,
     xi = red.psi + jax.jacfwd(lambda t: correction(t, alpha, red, scene, disc)[0])(q)
     Z = red.Z
     KY = Z.T @ stiffness_matrix(disc) @ Z
-    L = jnp.linalg.cholesky(KY)
-    solve_l = lambda b: jax.scipy.linalg.solve_triangular(L, b, lower=True)
-    C = solve_l(solve_l(Z.T @ H @ Z).T).T
-    coercivity = jnp.linalg.eigvalsh(0.5 * (C + C.T))[0]
+    coercivity = smallest_generalised_eigenvalue(Z.T @ H @ Z, KY)
     F_q = jax.grad(lambda t: reduced_function(t, alpha, red, scene, disc))(q)
     cross = (Z.T @ (H @ xi)) / jnp.sqrt(jnp.diag(KY))
     return {"coercivity": coercivity, "dF_dq": F_q, "Q_xi_xi": xi @ H @ xi,

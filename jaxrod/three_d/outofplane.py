@@ -27,14 +27,8 @@ from jaxrod.discretise.director import director_discretisation
 from jaxrod.discretise.planar import PlanarDiscretisation
 from jaxrod.scenes.dipole import DipoleMagnet, dipole_potential, magnet_direction
 from jaxrod.scenes.three_d import DipoleMagnet3D, magnet_position
+from jaxrod.solvers.eigen import smallest_generalised_eigenvalue
 from jaxrod.stored import StoredProgram
-
-
-def _smallest_generalised(H, W):
-    L = jnp.linalg.cholesky(W)
-    solve_l = lambda b: jax.scipy.linalg.solve_triangular(L, b, lower=True)
-    C = solve_l(solve_l(H).T).T
-    return jnp.linalg.eigvalsh(0.5 * (C + C.T))[0]
 
 
 def _sinc(x):
@@ -74,9 +68,9 @@ def out_of_plane(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation) 
     theta_full = disc.full_values(theta)
     return {
         "coupling": jnp.max(jnp.abs(H12)),
-        "min_eig_perp": _smallest_generalised(H22, W_b),
-        "min_eig_perp_formula": _smallest_generalised(Q, W_a),
-        "min_eig_plane": _smallest_generalised(H11, W_a),
+        "min_eig_perp": smallest_generalised_eigenvalue(H22, W_b),
+        "min_eig_perp_formula": smallest_generalised_eigenvalue(Q, W_a),
+        "min_eig_plane": smallest_generalised_eigenvalue(H11, W_a),
         "theta_in_0_pi": jnp.all((theta_full[1:] > 0.0) & (theta_full[1:] < jnp.pi)),
         "g1": g[0],
         "d22_phi": d22,

@@ -43,6 +43,7 @@ from jaxrod.discretise.planar import PlanarDiscretisation, check_support, planar
 from jaxrod.params import ParameterError, Rod, check, check_degree
 from jaxrod.programs import jit
 from jaxrod.scenes.uniform import UniformField
+from jaxrod.solvers.eigen import smallest_generalised_eigenpair
 from jaxrod.solvers.newton import newton
 
 #: Largest zeros of Ai and Ai' (DLMF table 9.9.1); they set the paper's explicit bounds.
@@ -75,17 +76,6 @@ def _quadratic_form(u, G, disc: PlanarDiscretisation):
     return disc.integrate(duq**2 - G * (1.0 - disc.quad_nodes) * uq**2)
 
 
-def _smallest_generalised_eigenpair(H, M):
-    """Smallest eigenpair of H v = lam M v (H symmetric, M SPD), v^T M v = 1."""
-    L = jnp.linalg.cholesky(M)
-    solve_l = lambda b: jax.scipy.linalg.solve_triangular(L, b, lower=True)
-    C = solve_l(solve_l(H).T).T
-    C = 0.5 * (C + C.T)
-    lam, V = jnp.linalg.eigh(C)
-    v = jax.scipy.linalg.solve_triangular(L.T, V[:, 0], lower=False)
-    return lam[0], v
-
-
 @jit
 def principal_eigenpair(G, disc: PlanarDiscretisation):
     """(beta0(G), u) for the support of ``disc``: int u^2 = 1 and int u > 0 (u > 0 inside).
@@ -96,7 +86,7 @@ def principal_eigenpair(G, disc: PlanarDiscretisation):
     ``thm:uniform_straight_stability`` (eq. ``uniform_straight_second_variation``).
     """
     H = _straight_hessian(G, disc)
-    _, u = _smallest_generalised_eigenpair(H, disc.mass_matrix())
+    _, u = smallest_generalised_eigenpair(H, disc.mass_matrix())
     u = u * jnp.sign(disc.mean(u))
     u = u / jnp.sqrt(disc.inner(u, u))
     return _quadratic_form(u, G, disc), u
@@ -116,7 +106,7 @@ def pitchfork_coefficients(G, disc: PlanarDiscretisation):
 def _greenhill_load(disc: PlanarDiscretisation):
     K = _straight_hessian(0.0, disc)
     W = K - _straight_hessian(1.0, disc)  # matrix of int (1 - s) u^2 (SPD)
-    _, u = _smallest_generalised_eigenpair(K, W)
+    _, u = smallest_generalised_eigenpair(K, W)
     uq, duq = disc.at_quadrature(u)
     return disc.integrate(duq**2) / disc.integrate((1.0 - disc.quad_nodes) * uq**2)
 
