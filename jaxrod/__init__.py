@@ -69,6 +69,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "equilibrium": ("jaxrod.equilibria.equilibrium", "equilibrium"),
         "branch": ("jaxrod.equilibria.branch", "branch"),
         "scene_folds": ("jaxrod.equilibria.folds", "folds"),
+        "scene_sweep": ("jaxrod.equilibria.sweep", "sweep"),
         "fold_curve": ("jaxrod.bistability.fold_curve", "fold_curve"),
         "fold_map": ("jaxrod.bistability.fold_map", "fold_map"),
         "Status": ("jaxrod.status", "Status"),

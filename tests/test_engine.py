@@ -265,3 +265,22 @@ def test_bad_requests_are_named():
     assert not Status.NOT_CONVERGED.ok and Status.REACHED_BOUND.ok
     assert all(s.message for s in Status)
     jax.clear_caches()
+
+
+def test_a_quasi_static_sweep_snaps_just_past_the_folds():
+    """The magnet moved from 0 to 60 degrees and back on the paper's scene with a tip spring:
+    the rod follows the magnet, lets go at the first value past the upper fold, and is
+    captured at the first value past the lower fold on the way back."""
+    scene = spring_scene(0.05)
+    upper, lower = jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=N)
+    up = np.radians(np.arange(0.0, 60.0 + 1e-9, 0.5))
+    values = np.concatenate([up, up[::-1][1:]])
+    s = jr.scene_sweep(scene, "magnet.alpha", values, n=N, progress=False)
+    assert s.complete and s.converged and s.snapped.sum() == 2
+    release, capture = np.nonzero(s.snapped)[0]
+    assert values[release - 1] < upper.value < values[release]
+    assert values[capture] < lower.value < values[capture - 1] and capture > up.size
+    # between the snaps the tip moves continuously, and jumps at them
+    steps = np.abs(np.diff(s.tip_angle_deg))
+    assert steps[release - 1] > 10 * np.max(np.delete(steps, [release - 1, capture - 1]))
+    assert s.snaps[0]["tip_before_deg"] > s.snaps[0]["tip_after_deg"]

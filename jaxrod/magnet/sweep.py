@@ -6,15 +6,13 @@ from __future__ import annotations
 
 import math
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.equilibria.sweep import follow_path
 from jaxrod.magnet.diagram import (
     DEFAULT_N,
-    _alpha_jacobian,
-    _alpha_residual,
     _equilibrium,
     _observables,
     _relax,
@@ -24,31 +22,12 @@ from jaxrod.params import check, check_degree
 from jaxrod.programs import jit
 from jaxrod.progress import Interrupted
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
-from jaxrod.solvers.descent import descend
-from jaxrod.solvers.newton import newton
-
-
-def _follow_step(carry, alpha, scene, disc):
-    theta_prev = carry
-    args = (scene, disc)
-    res = newton(_alpha_residual, theta_prev, (alpha, *args), tol=1e-12,
-                 jacobian=_alpha_jacobian)
-    H = ALPHA_MODEL.hessian(res.x, alpha, args)
-    stable = jnp.linalg.eigvalsh(H)[0] > 0.0
-    close = jnp.sqrt(jnp.mean((res.x - theta_prev) ** 2)) < 0.1
-    followed = res.converged & stable & close
-
-    def snap(_):
-        d = descend(ALPHA_MODEL, theta_prev, args, lam=alpha)
-        return d.x, d.converged
-
-    theta, ok = jax.lax.cond(followed, lambda _: (res.x, res.converged), snap, None)
-    return theta, (theta, ~followed, ok)
 
 
 @jit
 def _sweep(theta0, alphas, scene, disc):
-    return jax.lax.scan(lambda c, a: _follow_step(c, a, scene, disc), theta0, alphas)
+    """The generic quasi-static path (``jaxrod.equilibria.sweep``) in the magnet angle."""
+    return follow_path(ALPHA_MODEL, theta0, alphas, (scene, disc))
 
 
 #: Magnet positions per compiled chunk of a sweep (progress and Ctrl-C act between chunks).
@@ -61,7 +40,8 @@ def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: flo
 
     At each magnet position the previous state is continued by Newton; when it no longer
     exists as a nearby stable equilibrium (a fold was passed) the rod snaps: the energy is
-    descended from the last state to the other stable branch. Returns both sweeps, the snap
+    descended from the last state to the other stable branch (the steps of
+    ``jaxrod.equilibria.sweep``, for any scene). Returns both sweeps, the snap
     angles on the grid (the first grid angle past a fold) and whether every step converged.
 
     The positions run in compiled chunks of ``SWEEP_CHUNK`` (one program for every chunk);

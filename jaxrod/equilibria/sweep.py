@@ -1,0 +1,141 @@
+"""The quasi-static protocol on any scene: an input moved through given values, the rod
+following its equilibrium and snapping where it ceases to exist.
+
+At each value lam_k the previous state x_{k-1} is continued by Newton on grad E(x; lam_k) = 0.
+The step is *followed* when Newton converges to a stable state (the Hessian's smallest
+eigenvalue positive) within an RMS distance 0.1 of x_{k-1}; otherwise a fold was passed and
+the rod *snaps*: the energy E(.; lam_k) is descended from x_{k-1} to the stable state it
+falls into (``jaxrod.solvers.descent``). The values run in compiled chunks (``lax.scan``),
+progress and Ctrl-C acting between them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.derivatives import Structured
+from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, equilibrium, solve_at, tip
+from jaxrod.params import ParameterError
+from jaxrod.programs import jit
+from jaxrod.progress import Interrupted, interrupt_requested, progress_bar
+from jaxrod.scenes.scene import Input, Scene
+from jaxrod.solvers.descent import descend
+
+#: Values per compiled chunk.
+CHUNK = 256
+#: A followed step moves the state by at most this RMS (radians); more means a snap.
+FOLLOW_RMS = 0.1
+
+
+def follow_step(model, x_prev, lam, args):
+    """(x, snapped, converged) at lam from x_prev (module docstring; traceable)."""
+    res = solve_at(model, x_prev, lam, args)
+    stable = jnp.linalg.eigvalsh(model.hessian(res.x, lam, args))[0] > 0.0
+    close = jnp.sqrt(jnp.mean((res.x - x_prev) ** 2)) < FOLLOW_RMS
+    followed = res.converged & stable & close
+
+    def snap(_):
+        d = descend(model, x_prev, args, lam=lam)
+        return d.x, d.converged
+
+    x, ok = jax.lax.cond(followed, lambda _: (res.x, res.converged), snap, None)
+    return x, ~followed, ok
+
+
+def follow_path(model, x0, lams, args):
+    """States along the values ``lams`` from x0: (last state, (states, snapped, converged))
+    (traceable, one ``lax.scan``)."""
+    def step(x, lam):
+        x, snapped, ok = follow_step(model, x, lam, args)
+        return x, (x, snapped, ok)
+
+    return jax.lax.scan(step, x0, lams)
+
+
+def _chunk_program(x0, values, scene, disc, vary):
+    model = Structured(Input(vary))
+    args = (scene, disc, 0.0, 1.0)
+    end, (xs, snapped, ok) = follow_path(model, x0, values, args)
+    observed = jax.vmap(lambda x, v: tip(scene.replace(vary, v), x, disc))(xs, values)
+    return end, xs, snapped, ok, observed
+
+
+_chunk = jit(_chunk_program, static_argnames=("vary",))
+
+
+@dataclasses.dataclass(frozen=True)
+class Sweep:
+    """A quasi-static sweep of ``vary`` through ``values``: the state, tip angle (degrees,
+    from +z toward +x) and tip position at each value, whether the rod snapped on arriving
+    there, whether each step converged; ``complete`` False when interrupted (``reason``)."""
+
+    vary: str
+    values: np.ndarray
+    states: np.ndarray
+    tip_angle_deg: np.ndarray
+    tip_position: np.ndarray
+    snapped: np.ndarray
+    step_converged: np.ndarray
+    complete: bool = True
+    reason: str | None = None
+
+    @property
+    def converged(self) -> bool:
+        return bool(np.all(self.step_converged))
+
+    @property
+    def snaps(self) -> list[dict]:
+        """Where the rod snapped: the value and the tip before and after."""
+        return [{"value": float(self.values[i]),
+                 "tip_before_deg": float(self.tip_angle_deg[i - 1]) if i else math.nan,
+                 "tip_after_deg": float(self.tip_angle_deg[i])}
+                for i in np.nonzero(self.snapped)[0]]
+
+
+def sweep(scene: Scene, vary: str, values, n: int = DEFAULT_N, state=None,
+          progress: bool = True) -> Sweep:
+    """Move the input ``vary`` of ``scene`` through ``values`` quasi-statically (module
+    docstring), from the equilibrium at the first value reached by ramping the loads from
+    zero, or from ``state``. Ctrl-C raises ``jaxrod.Interrupted`` whose ``partial`` is the
+    sweep so far.
+
+    Paper: the experiment's protocol (eq. ``intro-hysteresis``), for any scene and input.
+    """
+    scene.check_key(vary)
+    values = np.asarray(values, float).ravel()
+    if values.size < 2 or not np.all(np.isfinite(values)):
+        raise ParameterError(f"values of {vary}: at least two finite values, got {values.size}")
+    disc = discretise(scene, n)
+    start = equilibrium(scene.replace(vary, float(values[0])), n, state=state)
+    x = jnp.asarray(start.state)
+    parts = []
+    bar = progress_bar(values.size, "sweep", unit="value", enabled=progress)
+
+    def result(reason):
+        done = sum(p[0].shape[0] for p in parts)
+        cols = [np.concatenate([p[j] for p in parts]) if parts else np.zeros(0)
+                for j in range(5)]
+        return Sweep(vary, values[:done], cols[0], np.degrees(cols[3]), cols[4],
+                     cols[1].astype(bool), cols[2].astype(bool), reason is None, reason)
+
+    for lo in range(0, values.size, CHUNK):
+        chunk = values[lo:lo + CHUNK]
+        padded = np.pad(chunk, (0, CHUNK - chunk.size), mode="edge")
+        _, xs, snapped, ok, (angle, X) = jax.device_get(
+            _chunk(x, jnp.asarray(padded), scene, disc, vary))
+        k = chunk.size
+        # the state after the last real value (padding repeats it: the same state)
+        x = jnp.asarray(xs[k - 1])
+        parts.append((xs[:k], snapped[:k], ok[:k] & start.converged, angle[:k], X[:k]))
+        bar.update(k)
+        if interrupt_requested() and lo + CHUNK < values.size:
+            bar.close()
+            raise Interrupted(result(f"interrupted after {lo + k} of {values.size} values"),
+                              "sweep")
+    bar.close()
+    return result(None)
