@@ -132,7 +132,7 @@ def test_the_planar_forms_agree_with_the_director_forms():
 
 
 def test_the_papers_scenes_are_their_printed_energies():
-    """The paper's scenes, now views of the terms, against their energies written out:
+    """The paper's scenes against their energies written out:
     E_perm = 1/2 int theta'^2 + G int (1 - s) cos theta + M Phi(X) and E_unif with
     A/2 int sin^2 theta (whole functionals), and the 3D classes against 3D scenes."""
     disc = planar_discretisation(N)
@@ -154,6 +154,12 @@ def test_the_papers_scenes_are_their_printed_energies():
     printed = (0.5 * jnp.dot(w, dth**2) + G * jnp.dot(w, (1 - s) * jnp.cos(th))
                + 1.5 * jnp.dot(w, jnp.sin(th) ** 2))
     assert abs(UniformField(G, 3.0).energy(x, disc) - printed) <= 1e-14
+    # the written-out planar forms against the same scenes as terms
+    for old in (DipoleMagnet(G, M, D, 0.7), UniformField(G, 3.0)):
+        a = _call(FIXED, "hessian", x, 0.0, (old, disc))
+        b = _call(FIXED, "hessian", x, 0.0, (old.scene, disc))
+        assert np.max(np.abs(a - b)) <= 1e-13 * np.max(np.abs(b))
+        assert abs(old.energy(x, disc) - old.scene.energy(x, disc)) <= 1e-14
     d3 = director_discretisation(N)
     y = _state(d3.size, 0.2)
     for scene, old in ((paper_scene("3d", 0.5, 0.2),

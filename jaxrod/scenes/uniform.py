@@ -15,8 +15,10 @@ from __future__ import annotations
 import dataclasses
 
 import jax
+import jax.numpy as jnp
 
 from jaxrod.discretise.planar import PlanarDiscretisation
+from jaxrod.scenes.functionals import anisotropy_energy, bending_energy, gravity_energy
 from jaxrod.scenes.scene import Scene
 from jaxrod.scenes.terms import Anisotropy, Bending, Gravity
 
@@ -37,13 +39,18 @@ class UniformField:
 
     @property
     def scene(self) -> Scene:
-        """The same energy as a scene of terms: bending, gravity and the anisotropy."""
+        """The same energy as a scene of terms (bending, gravity, the anisotropy) for the
+        generic analyses; the methods below write it out for the planar rod (faster to
+        compile and run; tests/test_engine.py checks that both agree)."""
         return Scene({"bending": Bending(), "gravity": Gravity(self.G),
                       "field": Anisotropy(self.A)})
 
     def density(self, a, s):
-        """theta'^2 / 2 + G (1 - s) cos(theta) + A sin(theta)^2 / 2 (the terms' densities)."""
-        return self.scene.density(a, s)
+        """Energy density at one node, a = (theta, theta'):
+        theta'^2 / 2 + G (1 - s) cos(theta) + A sin(theta)^2 / 2."""
+        return 0.5 * a[1] ** 2 + self.G * (1.0 - s) * jnp.cos(a[0]) \
+            + 0.5 * self.A * jnp.sin(a[0]) ** 2
 
     def energy(self, theta: jax.Array, disc: PlanarDiscretisation) -> jax.Array:
-        return self.scene.energy(theta, disc)
+        return (bending_energy(theta, disc) + gravity_energy(theta, disc, self.G)
+                + anisotropy_energy(theta, disc, self.A))
