@@ -84,3 +84,40 @@ def test_modules_stay_small():
         if n > limit:
             big.append(f"{path.relative_to(ROOT.parent)}: {n} lines (limit {limit})")
     assert not big, "\n".join(big)
+
+
+def test_the_old_module_paths_still_import_with_a_deprecation_warning():
+    """Every module moved out of jaxrod.analysis imports under its old path for one release,
+    with a DeprecationWarning naming the new one, and gives the same objects."""
+    import importlib
+    import subprocess
+    import sys
+
+    from jaxrod.analysis import MOVED
+
+    code = ("import importlib, json, warnings\n"
+            "out = {}\n"
+            f"for old in {sorted(MOVED)!r}:\n"
+            "    with warnings.catch_warnings(record=True) as w:\n"
+            "        warnings.simplefilter('always')\n"
+            "        m = importlib.import_module('jaxrod.analysis.' + old)\n"
+            "    out[old] = [str(x.message) for x in w if x.category is DeprecationWarning]\n"
+            "print(json.dumps(out))\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    import json
+
+    said = json.loads(proc.stdout)
+    for old, new in MOVED.items():
+        assert said[old] and all(f"jaxrod.{n.strip()}" in said[old][0]
+                                 for n in new.split("+")), (old, said[old])
+    # the same objects through either path (the aliases are the new modules themselves)
+    import warnings
+
+    from jaxrod.magnet.folds import locate_folds
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        assert importlib.import_module("jaxrod.analysis.magnet").locate_folds is locate_folds
+        assert importlib.import_module("jaxrod.analysis.batch") is \
+            importlib.import_module("jaxrod.magnet.batch")
