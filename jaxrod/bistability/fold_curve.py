@@ -146,16 +146,4 @@ def fold_curve(scene: Scene, vary: str, vary_range: tuple[float, float], along: 
                      tip_angle_deg=cat[2], cusp_test=cat[3], status=tuple(status), start=f)
 
 
-def cusp_between(curve: FoldCurve) -> list[tuple[float, float]]:
-    """(along, vary) at each cusp passed, by linear interpolation of the cusp test."""
-    out = []
-    for i in curve.cusp_indices:
-        c0, c1 = curve.cusp_test[i], curve.cusp_test[i + 1]
-        t = c0 / (c0 - c1)
-        out.append((float(curve.along_values[i] + t * (curve.along_values[i + 1]
-                                                      - curve.along_values[i])),
-                    float(curve.values[i] + t * (curve.values[i + 1] - curve.values[i]))))
-    return out
-
-
-__all__ = ["FoldCurve", "fold_curve", "cusp_between"]
+__all__ = ["FoldCurve", "fold_curve"]

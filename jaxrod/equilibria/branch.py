@@ -8,6 +8,7 @@ branch is followed round folds; it ends at either end of the range.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import jax
@@ -28,7 +29,6 @@ from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.scene import Input, Scene
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
-from jaxrod.status import Status
 
 
 def branch_options(max_points: int = 400) -> ContinuationOptions:
@@ -91,14 +91,5 @@ def branch(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_
     run = run._replace(lam=start + (stop - start) * run.lam,
                        tangent_lam=(stop - start) * run.tangent_lam)
     b = branch_from_runs([(run, False, observed)])
-    k = int(run.num_points)
-    return Branch(**{f: getattr(b, f) for f in ("value", "theta", "q", "tip", "energy",
-                                                 "min_eig", "morse_index", "tangent_value",
-                                                 "newton_iterations", "residual_norm",
-                                                 "status", "complete")},
-                  vary=vary, tip_position=np.asarray(X)[:k])
-
-
-def status_of(b: Branch) -> Status:
-    """The branch's ``Status`` (REACHED_BOUND when it ran through its range)."""
-    return Status.REACHED_BOUND if b.complete else Status.NOT_CONVERGED
+    return dataclasses.replace(b, vary=vary,
+                               tip_position=np.asarray(X)[:int(run.num_points)])

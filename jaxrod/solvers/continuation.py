@@ -38,6 +38,7 @@ from jaxrod.solvers.arclength import (
     STEP_TOO_SMALL,
     StepControl,
     arclength_run,
+    unit_tangent,
 )
 from jaxrod.status import Status
 
@@ -83,27 +84,6 @@ class RawBranch(NamedTuple):
 
 def _wdot(a, b, m):
     return jnp.dot(a[:-1], b[:-1]) / m + a[-1] * b[-1]
-
-
-def _bordered(H, g_lam, t):
-    """[F_x F_lam; t^T W], the Jacobian of the corrector system."""
-    m = H.shape[0]
-    w = jnp.append(jnp.full(m, 1.0 / m, H.dtype), 1.0)
-    return jnp.vstack([jnp.hstack([H, g_lam[:, None]]), (w * t)[None, :]])
-
-
-def _unit_tangent(B, m):
-    """The solution t of B t = e_last, scaled to <t, t> = 1."""
-    t = jnp.linalg.solve(B, jnp.zeros(B.shape[0], B.dtype).at[-1].set(1.0))
-    return t / jnp.sqrt(_wdot(t, t, m))
-
-
-def _oriented_tangent(H, g_lam, direction):
-    """Unit tangent at a regular point from its blocks H, F_lam, oriented so that d lam has
-    the sign of ``direction``."""
-    m = H.shape[0]
-    e = jnp.zeros(m + 1, H.dtype).at[-1].set(1.0)
-    return jnp.sign(direction) * _unit_tangent(_bordered(H, g_lam, e), m)
 
 
 def _spectrum(H):
@@ -181,7 +161,10 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
     m = x0.shape[0]
     y0 = jnp.append(x0, lam0)
     F0, H0, g_lam0 = model.linearisation(x0, lam0, args)
-    t0 = _oriented_tangent(H0, g_lam0, direction)
+    system = _Equilibria(model, m, spectrum, H0.dtype)
+    # the unit tangent at a regular point, oriented so that d lam has the sign of direction
+    e = jnp.zeros(m + 1, H0.dtype).at[-1].set(1.0)
+    t0 = jnp.sign(direction) * unit_tangent(system, jnp.hstack([H0, g_lam0[:, None]]), e)
     nan = jnp.full(capacity, jnp.nan)
     out = RawBranch(
         x=jnp.full((capacity, m), jnp.nan), lam=nan, tangent_lam=nan,
@@ -193,7 +176,7 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
     control = StepControl(opts.ds, opts.ds_min, opts.ds_max, opts.growth, opts.tol,
                           opts.max_folds)
     out, num, status, rejected = arclength_run(
-        _Equilibria(model, m, spectrum, H0.dtype), args, y0, t0, None, out, control, opts, capacity,
+        system, args, y0, t0, None, out, control, opts, capacity,
         FOLDS_FOUND)
     return out._replace(num_points=num, status=status, rejected_steps=rejected)
 
