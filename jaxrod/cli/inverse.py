@@ -131,10 +131,11 @@ def cmd_fit(args) -> int:
 
 def _legacy_fit_keys(cal) -> dict:
     """The keys of the one-parameter fit's JSON (E_Pa, offset_deg, ...), for scripts."""
-    est, std = cal.estimates, cal.std
-    return {"E_Pa": est.get("E"), "E_std_Pa": std.get("E"),
-            "offset_deg": est.get("offset", 0.0), "offset_std_deg": std.get("offset", 0.0),
-            "warning": "; ".join(cal.warnings) or None}
+    from jaxrod.inverse.youngs import fit_result
+
+    flat = fit_result(cal, "offset" in cal.free)
+    return {k: flat[k] for k in ("E_Pa", "E_std_Pa", "offset_deg", "offset_std_deg",
+                                 "warning")}
 
 
 def _print_calibration(cal, angle_names) -> None:

@@ -20,15 +20,17 @@ import numpy as np
 
 from jaxrod.design_point import DesignPoint, range_of
 from jaxrod.inverse.calibration import (
+    MODEL_N,
     OFFSET,
     Problem,
     angles_from_folds,
     parameter_names,
+    parse_angles,
     physical_parameters,
     sign_hint,
+    solve_batch,
     solve_program,
 )
-from jaxrod.inverse.youngs import FIT_N, _parse
 from jaxrod.magnet.folds import fold_angles
 from jaxrod.params import (
     NDFEB_MAGNET,
@@ -38,6 +40,7 @@ from jaxrod.params import (
     check_value,
     preset,
 )
+from jaxrod.progress import Interrupted, progress_bar
 
 # --- several parameters: calibration of the experiment on physical inputs -------------------
 
@@ -178,7 +181,56 @@ def fit(measured, free=("E", OFFSET), point: DesignPoint | None = None,
     value of a free parameter (default: the point's value, offset 0). One compiled program
     serves every choice of these (``jaxrod.inverse.calibration``).
     """
-    measured, mask = _parse(measured, sigma_deg)
+    prepared = _prepare(measured, free, point, priors, sigma_deg, bounds, start)
+    return _calibration(*prepared, solve_program(prepared[0].kind, prepared[1]))
+
+
+def fit_batch(measured, free=("E", OFFSET), point: DesignPoint | None = None,
+              priors: dict | None = None, sigma_deg: float = 1.0, bounds: dict | None = None,
+              start: dict | None = None, method: str = "auto",
+              progress: bool = False) -> list[Calibration]:
+    """``fit`` of each row of ``measured`` (K, 4), the other inputs shared.
+
+    ``method="vmap"`` runs them in one vmapped, compiled call (the form that scales on a
+    GPU); ``"loop"`` runs the compiled single fit row by row, which is faster on a CPU, where
+    every nested while loop of a vmapped batch runs until its slowest element is done
+    (benchmarks/fit_performance.py). ``"auto"`` picks vmap on a GPU and loop otherwise.
+    ``progress`` shows a progress bar on a terminal (loop only); Ctrl-C raises
+    ``jaxrod.progress.Interrupted`` with the fits done so far as ``partial``.
+    """
+    rows = []
+    for i, m in enumerate(np.atleast_2d(measured)):
+        try:
+            rows.append(_prepare(m, free, point, priors, sigma_deg, bounds, start))
+        except ParameterError as err:
+            raise ParameterError(f"row {i}: {err}") from None
+    if method == "auto":
+        method = "vmap" if jax.default_backend() == "gpu" else "loop"
+    if method not in ("vmap", "loop"):
+        raise ParameterError(f"method must be 'auto', 'vmap' or 'loop', got {method!r}")
+    if method == "loop":
+        out = []
+        bar = progress_bar(len(rows), "fits", "fit", progress)
+        try:
+            for prepared in rows:
+                out.append(_calibration(*prepared, solve_program(prepared[0].kind,
+                                                                 prepared[1])))
+                bar.update(1)
+        except KeyboardInterrupt:
+            raise Interrupted(out, f"after {len(out)} of {len(rows)} fits") from None
+        finally:
+            bar.close()
+        return out
+    kind = rows[0][0].kind
+    problems = jax.tree.map(lambda *a: jnp.stack(a), *(r[1] for r in rows))
+    solutions = solve_batch(kind, problems)
+    return [_calibration(*r, jax.tree.map(lambda a, i=i: a[i], solutions))
+            for i, r in enumerate(rows)]
+
+
+def _prepare(measured, free, point, priors, sigma_deg, bounds, start):
+    """Validate a fit's inputs: (point, problem, free, priors, mask, rows of r)."""
+    measured, mask = parse_angles(measured, sigma_deg)
     point = point or default_point()
     if point.kind != "physical":
         raise ParameterError("point: a calibration needs a physical design point (the "
@@ -203,8 +255,9 @@ def fit(measured, free=("E", OFFSET), point: DesignPoint | None = None,
     n_data = int(mask.sum())
     n_priors = sum(1 for name in priors if name in free)
     problem = _problem(point, measured, mask, sigma_deg, free, priors, bounds, p_start)
-    solution = solve_program(point.kind, problem)
-    return _calibration(point, problem, solution, free, priors, mask, n_data + n_priors)
+    return point, problem, free, priors, mask, n_data + n_priors
+
+
 
 
 def _start_vector(point: DesignPoint, start: dict, free) -> np.ndarray:
@@ -221,7 +274,7 @@ def _start_vector(point: DesignPoint, start: dict, free) -> np.ndarray:
     return p
 
 
-def _calibration(point, problem, solution, free, priors, mask, n_rows) -> Calibration:
+def _calibration(point, problem, free, priors, mask, n_rows, solution) -> Calibration:
     names = parameter_names(point.kind)
     idx = [names.index(n) for n in free]
     res = jax.device_get(solution.result)
@@ -364,7 +417,7 @@ def _fit_fixed_offset(measured, others, point, priors, sigma_deg, offset, start)
 
 def _chi2_at(measured, point: DesignPoint, sigma_deg) -> float:
     G, M, D = point.groups()
-    alphas, ok = fold_angles(G, M, D, n=FIT_N)
+    alphas, ok = fold_angles(G, M, D, n=MODEL_N)
     model = np.asarray(angles_from_folds(alphas, 0.0))
-    m, mask = _parse(measured, sigma_deg)
+    m, mask = parse_angles(measured, sigma_deg)
     return float(np.sum(((model - m)[mask] / sigma_deg) ** 2)) if bool(ok) else math.nan

@@ -1,4 +1,6 @@
-"""Young's modulus from measured switching angles (paper, permanent-magnet experiment).
+"""Young's modulus from measured switching angles (paper, permanent-magnet experiment): the
+calibration of ``jaxrod.inverse.fit`` with E (and optionally the offset) free, as one call
+with a flat result.
 
 The measured angles, in the order of the experiment's protocol and with the sign of the
 magnet angle alpha (positive towards e1):
@@ -16,23 +18,13 @@ offset delta of the angular scale (a misaligned track):
 
 With E the only material unknown, G and M scale as 1/E (``gravity_group``,
 ``magnet_group``) and D does not depend on E. The fit minimises
-0.5 sum_i ((model_i - measured_i) / sigma)^2 over p = (log E, delta) (log E keeps E
-positive) with optax's L-BFGS direction (``optax.scale_by_lbfgs``) and a backtracking line
-search on the sufficient decrease (Armijo) condition, in scaled coordinates
-p = p0 + P u with P = (J0^T J0)^(-1/2) from the first Jacobian, so that the first direction
-is the Gauss-Newton step.
-
-The fold model tracks the folds: the folds at the starting modulus come from the one-mode
-brackets and Moore-Spence where they succeed, else from a continuation from the straight rod
-(``jaxrod.inverse.calibration.start_states``, the calibration's start), and every later
-evaluation solves each fold's Moore-Spence system from the folds of the last accepted point
-(``tracked_angles``; the folds move smoothly with E). Residuals, their
-Jacobian and the gradient J^T r come from one forward-mode pass at one place in the loop
-(implicit differentiation of the Moore-Spence systems), and a trial point where a solve
-fails is rejected by the line search. The standard deviation of E follows from the
-Gauss-Newton covariance (J^T J)^-1 of the residuals r_i / sigma at the optimum:
-std(E) = E std(log E). ``model_angles`` (a continuation from the straight rod per call) is
-the independent reference the tests build synthetic data with.
+0.5 sum_i ((model_i - measured_i) / sigma)^2 over (log E, delta) with the calibration's one
+least-squares program (``jaxrod.inverse.calibration``: optax's L-BFGS direction, Armijo line
+search, Gauss-Newton scaling, the folds tracked by Moore-Spence and differentiated
+implicitly). A ``FitSetup`` (the groups at a reference modulus) becomes the physical design
+point with those groups (``point_of``). The standard deviation of E follows from the
+Gauss-Newton covariance at the optimum. ``model_angles`` (a continuation from the straight
+rod per call) is the independent reference the tests build synthetic data with.
 """
 
 from __future__ import annotations
@@ -44,30 +36,18 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
+from jaxrod.design_point import DesignPoint
 from jaxrod.inverse.calibration import (
-    ANGLE_NAMES,
+    ANGLE_NAMES,  # noqa: F401  (the angles' order)
+    OFFSET,
     angles_from_folds,
-    sign_hint,
-    start_states,
+    parse_angles,
 )
+from jaxrod.inverse.fit import Calibration, fit
+from jaxrod.inverse.fit import fit_batch as calibrate_rows
 from jaxrod.magnet.folds import fold_angles
-from jaxrod.params import (
-    NDFEB_MAGNET,
-    RANGES,
-    ParameterError,
-    check,
-    check_track_clearance,
-    preset,
-)
+from jaxrod.params import NDFEB_MAGNET, ParameterError, check, check_track_clearance, preset
 from jaxrod.programs import jit
-from jaxrod.progress import Interrupted, progress_bar
-from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
-from jaxrod.solvers.folds import differentiable_fold
-from jaxrod.solvers.least_squares import forward_mode, least_squares_run
-from jaxrod.stored import StoredProgram
-
-LOG_E_RANGE = (math.log(1e9), math.log(1e13))
 
 
 @jax.tree_util.register_dataclass
@@ -111,80 +91,47 @@ class FitResult(dict):
     converged, iterations, reduced_chi2, reason (why not converged), warning (poor fit)."""
 
 
-#: Moore-Spence discretisation of the fit's fold model (N = 12 reaches the round-off floor
-#: of the fold angles at the experiment's parameters).
-FIT_N = 12
-
-
-def _scene(log_e, setup: FitSetup):
-    scale = setup.E_ref / jnp.exp(log_e)
-    return DipoleMagnet(setup.G_ref * scale, setup.M_ref * scale, setup.D, 0.0)
-
-
-def tracked_angles(params, z, setup: FitSetup, disc: PlanarDiscretisation):
-    """The four switching angles (degrees) at p = (log E, delta_deg) from fold states z
-    (2, 2m + 1) at nearby parameters: each fold is its Moore-Spence solution from z
-    (``differentiable_fold``, implicitly differentiated). Returns (angles, (z_new, ok));
-    ok is False when a solve fails or the folds leave 0 < lower < upper <= 90 degrees."""
-    args = (_scene(params[0], setup), disc)
-    m = disc.size
-    z_new, stats = jax.vmap(lambda zi: differentiable_fold(
-        ALPHA_MODEL, zi[:m], zi[-1], zi[m:2 * m], args))(z)
-    alphas = z_new[:, -1]
-    ok = jnp.all(stats[:, 0] == 1.0) & (alphas[0] > 0.0) & (alphas[1] - alphas[0] > 1e-9) \
-        & (alphas[1] <= 0.5 * jnp.pi)
-    return angles_from_folds(alphas, params[1]), (z_new, ok)
-
-
-def _fit_core(measured, mask, sigma, fit_offset, setup: FitSetup, log_e0, max_iter: int = 40,
-              gtol: float = 1e-9):
-    """Minimise 0.5 |r(p)|^2 over p = (log E, delta) (``least_squares_run``); the fold model
-    is evaluated from the fold states of the last accepted point (module docstring)."""
-    offset_free = jnp.asarray(fit_offset, jnp.float64)
-    free = jnp.stack([jnp.ones(()), offset_free])
-    disc = planar_discretisation(FIT_N, "clamped")
-    start = _scene(jnp.asarray(log_e0, jnp.float64), setup)
-    z0, found = start_states(start, disc)
-    target = jnp.where(mask, measured, 0.0)
-
-    def residuals(p, z):
-        model, (z_new, ok) = tracked_angles(p, z, setup, disc)
-        in_range = (p[0] > LOG_E_RANGE[0]) & (p[0] < LOG_E_RANGE[1])
-        return jnp.where(mask, (model - target) / sigma, 0.0), z_new, ok & in_range
-
-    res = least_squares_run(forward_mode(residuals), jnp.array([log_e0, 0.0]), z0, free, 4,
-                            found, max_iter, gtol)
-    cov = res.covariance(free)
-    return res.p, res.r * sigma, jnp.sqrt(cov[0, 0]), jnp.sqrt(cov[1, 1]) * offset_free, \
-        res.ok & found, res.iterations, res.grad_norm, res.converged
-
-
-_fit_jit = StoredProgram("fit", _fit_core, static_argnames=("max_iter",))
-_fit_batch_jit = jit(jax.vmap(_fit_core, in_axes=(0, 0, None, None, None, None)))
-
-
-def _parse(measured, sigma_deg):
+def point_of(setup: FitSetup) -> DesignPoint:
+    """The physical design point with the setup's groups at E = E_ref: the paper's rig
+    (``setup_from_preset``) with the density scaled to give G_ref, the track radius to give
+    D, the magnet's diameter reduced where the rod would touch it, and the rod's and the
+    magnet's magnetisations scaled alike to give M_ref (G ~ density, M ~ remanence times
+    rod-magnetisation, D = track radius / length)."""
+    rod, _ = preset("permanent-magnet")
+    base = DesignPoint.from_physical(rod, NDFEB_MAGNET).replace("E", setup.E_ref)
+    length = base.values[base.index("length")]
+    gap = (setup.D - 1.0) * length  # the track radius less the rod's length
+    d_magnet = min(base.values[base.index("magnet-diameter")], gap)
+    point = (base.replace("track-radius", setup.D * length)
+             .replace("magnet-diameter", d_magnet))
+    G, M, _ = point.groups()
+    root = math.sqrt(setup.M_ref / M)
+    value = lambda name: point.values[point.index(name)]
+    point = (point.replace("density", value("density") * setup.G_ref / G)
+             .replace("remanence", value("remanence") * root)
+             .replace("rod-magnetisation", value("rod-magnetisation") * root))
     try:
-        measured = np.asarray(measured, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ParameterError(f"angles: give 4 numbers ({', '.join(ANGLE_NAMES)}), got "
-                             f"{measured!r:.60}") from None
-    if measured.size != 4:
-        raise ParameterError(f"angles: give 4 values ({', '.join(ANGLE_NAMES)}), with nan for "
-                             f"a missing one; got {measured.size}")
-    if np.any(np.isinf(measured)):
-        raise ParameterError(f"angles: must be finite, or nan for one not measured; got "
-                             f"{measured.tolist()}")
-    mask = ~np.isnan(measured)
-    if mask.sum() == 0:
-        raise ParameterError("angles: at least one measured angle is needed")
-    check("sigma-deg", sigma_deg)
-    angle = RANGES["angle"]
-    bad = [name for name, v, m in zip(ANGLE_NAMES, measured, mask) if m and not angle.contains(v)]
-    if bad:
-        raise ParameterError(f"angles: switching angles must lie in {angle.interval()}; "
-                             f"{', '.join(bad)} do not")
-    return measured, mask
+        point.check()
+    except ParameterError as err:
+        raise ParameterError(f"setup: no physical point of the paper's rig has G = "
+                             f"{setup.G_ref:g}, M = {setup.M_ref:g}, D = {setup.D:g} at E = "
+                             f"{setup.E_ref:g} Pa ({err}); use jaxrod.fit with a physical "
+                             "DesignPoint") from None
+    return point
+
+
+def fit_result(cal: Calibration, fit_offset: bool) -> FitResult:
+    """A calibration as the flat ``FitResult`` of the E-only fit (E_Pa and E_std_Pa None
+    when E was not fitted, or E_std_Pa when the angles do not fix it)."""
+    est, std = cal.estimates, cal.std
+    used = [r for r in cal.residuals_deg if r is not None]
+    dof = max(len(used) - (2 if fit_offset else 1), 1)
+    chi2 = float(np.sum(np.square(used))) / cal.sigma_deg**2
+    return FitResult(
+        E_Pa=est.get("E"), E_std_Pa=std.get("E"), offset_deg=est.get(OFFSET, 0.0),
+        offset_std_deg=std.get(OFFSET, 0.0) if fit_offset else 0.0,
+        residuals_deg=cal.residuals_deg, converged=cal.converged, iterations=cal.iterations,
+        reduced_chi2=chi2 / dof, reason=cal.reason, warning="; ".join(cal.warnings) or None)
 
 
 def fit_youngs_modulus(measured, sigma_deg: float = 1.0, fit_offset: bool = False,
@@ -192,101 +139,47 @@ def fit_youngs_modulus(measured, sigma_deg: float = 1.0, fit_offset: bool = Fals
     """Fit E (and optionally the offset) to measured switching angles in degrees.
 
     ``measured`` holds the four angles in ``ANGLE_NAMES`` order; nan marks one that was not
-    measured. With the offset free, at least two angles are needed.
+    measured. With the offset free, at least two angles are needed. ``E_std_Pa`` is None
+    when the angles do not fix E. The calibration ``jaxrod.inverse.fit.fit`` with
+    free = ("E",) or ("E", "offset").
 
     Model: the four angles (capture and release, both directions) from the folds of
     Proposition ``thm:planar_fold`` plus the offset. Paper: Corollary
     ``cor:permanent_physical_parameters``.
     """
-    measured, mask = _parse(measured, sigma_deg)
+    _, mask = parse_angles(measured, sigma_deg)
     if fit_offset and mask.sum() < 2:
         raise ParameterError("angles: fitting the offset needs at least two angles")
     check("E", E0)
-    setup = setup or setup_from_preset()
-    out = _fit_jit(
-        jnp.asarray(np.nan_to_num(measured)), jnp.asarray(mask), float(sigma_deg),
-        bool(fit_offset), setup, math.log(E0))
-    return _result(*out, mask, sigma_deg, fit_offset, measured)
+    point = point_of(setup or setup_from_preset())
+    cal = fit(measured, _free(fit_offset), point, sigma_deg=sigma_deg, start={"E": E0})
+    return fit_result(cal, fit_offset)
+
+
+def _free(fit_offset: bool) -> tuple[str, ...]:
+    return ("E", OFFSET) if fit_offset else ("E",)
 
 
 def fit_batch(measured, sigma_deg: float = 1.0, fit_offset: bool = False,
               setup: FitSetup | None = None, E0: float = 150e9,
               method: str = "auto", progress: bool = False) -> list[FitResult]:
-    """Many independent fits, one per row of ``measured``.
-
-    ``method="vmap"`` runs them in one vmapped, compiled call (the form that scales on a
-    GPU); ``"loop"`` runs the compiled single fit row by row, which is faster on a CPU, where
-    every nested while loop of a vmapped batch runs until its slowest element is done
-    (benchmarks/fit_performance.py). ``"auto"`` picks vmap on a GPU and loop otherwise.
-    ``progress`` shows a progress bar on a terminal (loop only); Ctrl-C raises
-    ``jaxrod.progress.Interrupted`` with the fits done so far as ``partial``.
+    """Many independent fits, one per row of ``measured``: ``jaxrod.inverse.fit.fit_batch``
+    (``method`` "vmap", "loop" or "auto"; ``progress``; Ctrl-C keeps the fits done) with E
+    (and the offset) free, each as a ``FitResult``.
 
     Paper: Corollary ``cor:permanent_physical_parameters`` (one fit per row).
     """
-    rows = []
-    for i, m in enumerate(np.atleast_2d(measured)):
-        try:
-            rows.append(_parse(m, sigma_deg))
-        except ParameterError as err:
-            raise ParameterError(f"row {i}: {err}") from None
-    setup = setup or setup_from_preset()
-    if method == "auto":
-        method = "vmap" if jax.default_backend() == "gpu" else "loop"
-    if method not in ("vmap", "loop"):
-        raise ParameterError(f"method must be 'auto', 'vmap' or 'loop', got {method!r}")
-    if method == "loop":
-        out = []
-        bar = progress_bar(len(rows), "fits", "fit", progress)
-        try:
-            for m, _ in rows:
-                out.append(fit_youngs_modulus(m, sigma_deg, fit_offset, setup, E0))
-                bar.update(1)
-        except KeyboardInterrupt:
-            raise Interrupted(out, f"after {len(out)} of {len(rows)} fits") from None
-        finally:
-            bar.close()
-        return out
-    m = jnp.asarray(np.nan_to_num(np.stack([r[0] for r in rows])))
-    mask = jnp.asarray(np.stack([r[1] for r in rows]))
-    out = _fit_batch_jit(m, mask, float(sigma_deg), bool(fit_offset), setup, math.log(E0))
-    return [_result(*(v[i] for v in out), np.asarray(mask[i]), sigma_deg, fit_offset,
-                    rows[i][0]) for i in range(m.shape[0])]
-
-
-def _result(p, res, std_log_e, std_off, ok, k, gnorm, settled, mask, sigma_deg,
-            fit_offset, measured=None) -> FitResult:
-    E = float(np.exp(p[0]))
-    residuals = [float(r) if mk else None for r, mk in zip(np.asarray(res), mask)]
-    used = [r for r in residuals if r is not None]
-    dof = max(len(used) - (2 if fit_offset else 1), 1)
-    chi2 = float(np.sum(np.square(used)) / sigma_deg**2)
-    reasons = []
-    if not bool(ok):
-        reasons.append("the fold model has no two folds at the final E (no hysteresis there)")
-    if not bool(settled):
-        reasons.append(f"the gradient did not vanish (|grad| = {float(gnorm):.2e}) within "
-                       f"{int(k)} iterations")
-    if not (LOG_E_RANGE[0] < float(p[0]) < LOG_E_RANGE[1]):
-        reasons.append("E left the range 1 GPa - 10 TPa")
-    warning = None
-    if len(used) > dof and chi2 / dof > 9.0:
-        warning = (f"the residuals exceed sigma = {sigma_deg} deg (reduced chi^2 = "
-                   f"{chi2 / dof:.3g}): the measurement error is larger than assumed, or the "
-                   "angles' order or signs are wrong")
-    hint = sign_hint(np.nan_to_num(measured), mask) if measured is not None else None
-    if hint is not None:
-        warning = hint if warning is None else f"{warning}; {hint}"
-    return FitResult(
-        E_Pa=E, E_std_Pa=E * float(std_log_e), offset_deg=float(p[1]),
-        offset_std_deg=float(std_off), residuals_deg=residuals, converged=not reasons,
-        iterations=int(k), reduced_chi2=chi2 / dof, reason="; ".join(reasons) or None,
-        warning=warning)
+    check("E", E0)
+    point = point_of(setup or setup_from_preset())
+    cals = calibrate_rows(measured, _free(fit_offset), point, sigma_deg=sigma_deg,
+                          start={"E": E0}, method=method, progress=progress)
+    return [fit_result(c, fit_offset) for c in cals]
 
 
 def loss_profile(measured, E_values, sigma_deg: float = 1.0, fit_offset: bool = False,
                  setup: FitSetup | None = None):
     """0.5 chi^2 over a grid of E (offset at its best value for each E when fitted)."""
-    measured, mask = _parse(measured, sigma_deg)
+    measured, mask = parse_angles(measured, sigma_deg)
     setup = setup or setup_from_preset()
     return np.asarray(_loss_profile_program(
         np.log(np.asarray(E_values, np.float64)), np.nan_to_num(measured), mask,
