@@ -1,10 +1,11 @@
-"""Command-line front end: ``jaxrod greenhill | folds | branch | sweep | fit | design |
-certify | outofplane | track | cusp | foldcurve | map | reproduce`` (``jaxrod -h`` lists
-them).
+"""Command-line front end: ``jaxrod greenhill | equilibrium | folds | branch | sweep | fit |
+design | certify | outofplane | track | cusp | foldcurve | map | reproduce`` (``jaxrod -h``
+lists them); ``equilibrium``, ``folds`` and ``branch`` also take a scene file (any rig).
 
 Every command prints a human-readable report, or one JSON object with ``--json``. Invalid
 input exits with status 2 and a one-line message naming the parameter. One module per
-question (``uniform``, ``magnet``, ``three_d``, ``bistability``, ``inverse``, ``reproduce``),
+question (``uniform``, ``magnet``, ``three_d``, ``bistability``, ``inverse``, ``reproduce``,
+``scene_file``),
 each with its commands and their options; ``_inputs`` validates the options once and builds
 the rod, magnet or design point from them; ``_output`` writes what the commands share. The
 commands call only public functions of jaxrod (imported inside each command, so that the
@@ -24,6 +25,7 @@ from jaxrod.cli.bistability import add_cusp, add_foldcurve, add_map
 from jaxrod.cli.inverse import add_design, add_fit
 from jaxrod.cli.magnet import add_branch, add_certify, add_folds, add_sweep
 from jaxrod.cli.reproduce import add_reproduce
+from jaxrod.cli.scene_file import add_equilibrium
 from jaxrod.cli.three_d import add_outofplane, add_track
 from jaxrod.cli.uniform import add_greenhill
 from jaxrod.params import ParameterError
@@ -51,8 +53,9 @@ def build_parser() -> argparse.ArgumentParser:
         "rods under gravity and magnetic fields. Each command prints a report, or one JSON "
         "object with --json; bad input exits with status 2, a failed solve with status 1.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_OneLineErrorParser)
-    for add in (add_greenhill, add_folds, add_outofplane, add_track, add_certify, add_branch,
-                add_sweep, add_fit, add_design, add_cusp, add_foldcurve, add_map, add_reproduce):
+    for add in (add_greenhill, add_equilibrium, add_folds, add_outofplane, add_track,
+                add_certify, add_branch, add_sweep, add_fit, add_design, add_cusp,
+                add_foldcurve, add_map, add_reproduce):
         add(sub)
     return parser
 

@@ -8,12 +8,21 @@ from pathlib import Path
 
 from jaxrod.cli._inputs import _entry, _float, _magnet_scene_from_args, _source, add_magnet_inputs
 from jaxrod.cli._output import _header, _not_converged, _output_dir
+from jaxrod.cli.scene_file import (
+    add_scene_file_inputs,
+    branch_on_file,
+    folds_on_file,
+    uses_scene_file,
+)
+from jaxrod.params import ParameterError
 
 NO_FOLD_NOTE = ("no fold on the branch through the straight rod for alpha in (0, 90] degrees: "
                 "no hysteresis along the experiment's sweep")
 
 
 def cmd_folds(args) -> int:
+    if uses_scene_file(args):
+        return folds_on_file(args)
     scene, info = _magnet_scene_from_args(args)
     if args.method == "reduced":
         return _folds_reduced(scene, info, args)
@@ -115,6 +124,11 @@ def cmd_branch(args) -> int:
     from jaxrod.magnet.folds import locate_folds
     from jaxrod.plotting import diagram_figure
 
+    if uses_scene_file(args):
+        return branch_on_file(args)
+    if args.out is None:
+        raise ParameterError("out: give --out DIR (the diagram's branch.csv, branch.png and "
+                             "branch.json)")
     scene, info = _magnet_scene_from_args(args)
     out_dir = _output_dir(args.out)
     branch = trace_diagram(scene, args.n, figure_options())  # dense, for a smooth figure
@@ -206,7 +220,9 @@ def cmd_sweep(args) -> int:
 
 
 def add_folds(sub) -> None:
-    f = sub.add_parser("folds", help="fold (switching) angles of the permanent-magnet scene")
+    f = sub.add_parser("folds", help="fold (switching) angles of the permanent-magnet scene, "
+                       "or the folds along any input of a scene file")
+    add_scene_file_inputs(f, vary=True)
     add_magnet_inputs(f)
     f.add_argument("--method", choices=["moore-spence", "reduced"], default="moore-spence")
     f.set_defaults(func=cmd_folds)
@@ -219,9 +235,11 @@ def add_certify(sub) -> None:
 
 
 def add_branch(sub) -> None:
-    b = sub.add_parser("branch", help="whole bifurcation diagram (CSV, PNG, JSON)")
+    b = sub.add_parser("branch", help="whole bifurcation diagram (CSV, PNG, JSON), or the "
+                       "branch along any input of a scene file")
+    add_scene_file_inputs(b, vary=True)
     add_magnet_inputs(b)
-    b.add_argument("--out", required=True, help="output directory")
+    b.add_argument("--out", help="output directory (required for the paper's diagram)")
     b.set_defaults(func=cmd_branch)
 
 

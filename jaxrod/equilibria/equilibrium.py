@@ -42,7 +42,10 @@ DEFAULT_N = 16
 #: The load scale as continuation parameter.
 LOAD = Structured(Input("load_scale"))
 
-RAMP_OPTIONS = ContinuationOptions(ds=0.1, ds_min=1e-8, ds_max=0.2, lam_max=1.0, tol=1e-12,
+#: Steps of at most 0.05 in the load scale's arclength: near an imperfect pitchfork (a field
+#: almost opposite a hard-magnetic rod's magnetisation, with gravity) steps of 0.2 cut the
+#: branch's sharp turn and land on the unstable near-straight branch.
+RAMP_OPTIONS = ContinuationOptions(ds=0.05, ds_min=1e-8, ds_max=0.05, lam_max=1.0, tol=1e-12,
                                    max_folds=1, max_points=0)
 RAMP_CAPACITY = 200
 
@@ -68,6 +71,14 @@ def tip(scene: Scene, x, disc):
     d3 = jax.vmap(lambda aj: scene._jet(aj)[0])(a)
     X = d3.T @ disc.quad_weights
     return jnp.arctan2(X[0], X[2]), X
+
+
+def tip_tangent(scene: Scene, x, disc):
+    """The angle of the tangent d3(1) at the tip from +z toward +x (radians): the rotation of
+    the tip (the hard-magnetic elastica's tip angle); ``tip`` gives the direction of the tip
+    position, the paper's tip angle."""
+    d3 = scene._jet(disc.jet_matrix[-1] @ x)[0]  # the last quadrature node is s = 1
+    return jnp.arctan2(d3[0], d3[2])
 
 
 def _residual(x, args):
@@ -112,13 +123,16 @@ def ramp(scene: Scene, disc) -> tuple:
 class Equilibrium:
     """An equilibrium of a scene: the state and what it means.
 
-    ``tip_angle_deg`` is measured from +z toward +x; ``tip_position`` is X = int_0^1 d3 ds
-    (rod lengths); ``stable``: the Hessian's smallest eigenvalue is positive.
+    ``tip_angle_deg``: the direction of the tip position X = int_0^1 d3 ds (rod lengths,
+    ``tip_position``) from +z toward +x (the paper's tip angle); ``tip_tangent_deg``: the
+    tangent's angle at the tip from +z toward +x (the tip's rotation); ``stable``: the
+    Hessian's smallest eigenvalue is positive.
     """
 
     state: np.ndarray
     tip_angle_deg: float
     tip_position: np.ndarray
+    tip_tangent_deg: float
     energy: float
     smallest_eigenvalue: float
     stable: bool
@@ -133,7 +147,8 @@ class Equilibrium:
 
     def as_dict(self) -> dict:
         return {"tip_angle_deg": self.tip_angle_deg,
-                "tip_position": [float(v) for v in self.tip_position], "energy": self.energy,
+                "tip_position": [float(v) for v in self.tip_position],
+                "tip_tangent_deg": self.tip_tangent_deg, "energy": self.energy,
                 "smallest_eigenvalue": self.smallest_eigenvalue, "stable": self.stable,
                 "converged": self.converged, "residual_norm": self.residual_norm,
                 "iterations": self.iterations, "status": self.status.name.lower(),
@@ -152,7 +167,8 @@ def _report(scene, disc, x):
     model = FIXED
     H = model.hessian(x, 0.0, (scene, disc))
     angle, X = tip(scene, x, disc)
-    return angle, X, model.energy(x, 0.0, (scene, disc)), jnp.linalg.eigvalsh(H)[0]
+    return (angle, X, tip_tangent(scene, x, disc), model.energy(x, 0.0, (scene, disc)),
+            jnp.linalg.eigvalsh(H)[0])
 
 
 @jit
@@ -187,9 +203,10 @@ def equilibrium(scene: Scene, n: int = DEFAULT_N, state=None, throw: bool = True
                              f"({disc.size},)")
         (x, conv, res, it, status), rep = jax.device_get(_continued(scene, disc, x0))
     code = check(status, throw, "equilibrium")
-    angle, X, energy, eig = rep
+    angle, X, tangent, energy, eig = rep
     return Equilibrium(state=np.asarray(x), tip_angle_deg=math.degrees(float(angle)),
-                       tip_position=np.asarray(X), energy=float(energy),
+                       tip_position=np.asarray(X), tip_tangent_deg=math.degrees(float(tangent)),
+                       energy=float(energy),
                        smallest_eigenvalue=float(eig), stable=bool(eig > 0),
                        converged=bool(conv), residual_norm=float(res), iterations=int(it),
                        status=code)

@@ -1,0 +1,168 @@
+"""``jaxrod equilibrium RIG``, and ``jaxrod branch | folds RIG --vary KEY --from A --to B``:
+any rig described by a scene file (``jaxrod.scenes.files``), with ``--set KEY=VALUE``
+overrides. Angles are from +z toward +x: ``tip_angle_deg`` is the direction of the tip's
+position (the paper's tip angle), ``tip_tangent_deg`` the tangent's angle at the tip (its
+rotation); ``tip_position`` is in the file's length unit."""
+
+from __future__ import annotations
+
+import json
+
+from jaxrod.cli._inputs import _degree, _float
+from jaxrod.params import ParameterError
+
+
+def add_scene_file_inputs(p, vary: bool) -> None:
+    """The scene-file options: the file (optional where the command also takes the paper's
+    options), ``--set``, and for branches and folds ``--vary/--from/--to``."""
+    p.add_argument("rig", nargs="?", default=None,
+                   help="a scene file (TOML, or JSON): the rig, its fields and magnets")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override an entry of the scene file (dotted key, e.g. "
+                   "field.0.angle_deg=120); repeatable")
+    if vary:
+        p.add_argument("--vary", metavar="KEY", help="the scene file's input to vary "
+                       "(dotted key, e.g. field.0.angle_deg)")
+        p.add_argument("--from", dest="start", type=_float("from"), default=None,
+                       help="the varied input's first value (the file's units)")
+        p.add_argument("--to", dest="stop", type=_float("to"), default=None,
+                       help="its last value")
+
+
+def uses_scene_file(args) -> bool:
+    """Whether a command runs on a scene file; ParameterError if scene-file options come
+    without one."""
+    if args.rig is not None:
+        paper = [o for o in ("G", "M", "D", "preset") if getattr(args, o, None) is not None]
+        if paper:
+            raise ParameterError(f"rig: give a scene file or --{paper[0]}, not both")
+        return True
+    if args.set or getattr(args, "vary", None) is not None:
+        raise ParameterError("set/vary: name a scene file first (jaxrod COMMAND RIG.toml ...)")
+    return False
+
+
+def _load(args):
+    from jaxrod.scenes.files import load
+
+    return load(args.rig, args.set)
+
+
+def _range(args, file):
+    if args.vary is None or args.start is None or args.stop is None:
+        raise ParameterError("vary: give --vary KEY --from A --to B with a scene file")
+    key, factor = file.input_of(args.vary)
+    if args.start == args.stop:
+        raise ParameterError(f"to: must differ from --from ({args.start:g})")
+    return key, factor * args.start, factor * args.stop, factor
+
+
+def _at(eq_tip_deg, X, file) -> dict:
+    return {"tip_angle_deg": eq_tip_deg, "tip_position": [float(v) * file.length for v in X]}
+
+
+def cmd_equilibrium(args) -> int:
+    import jaxrod as jr
+
+    if not uses_scene_file(args):
+        raise ParameterError("rig: name a scene file (jaxrod equilibrium RIG.toml)")
+    file = _load(args)
+    eq = jr.equilibrium(file.scene, n=args.n, throw=False)
+    out = {"rig": args.rig, "set": args.set, **_at(eq.tip_angle_deg, eq.tip_position, file),
+           "tip_tangent_deg": eq.tip_tangent_deg, "stable": eq.stable,
+           "converged": eq.converged, "status": eq.status.name.lower(),
+           "message": eq.message, "smallest_eigenvalue": eq.smallest_eigenvalue,
+           "residual_norm": eq.residual_norm, "n": args.n}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        X = out["tip_position"]
+        print(f"{args.rig}: tip angle {eq.tip_angle_deg:.10f} deg, tip tangent "
+              f"{eq.tip_tangent_deg:.10f} deg, tip at ({X[0]:.6g}, {X[1]:.6g}, {X[2]:.6g}); "
+              f"{'stable' if eq.stable else 'UNSTABLE'}; {eq.message}")
+    return 0 if eq.converged else 1
+
+
+def branch_on_file(args) -> int:
+    """``jaxrod branch RIG --vary KEY --from A --to B``: the branch's points, folds and
+    stability changes (JSON with --json; branch.csv and branch.json with --out)."""
+    import numpy as np
+
+    import jaxrod as jr
+
+    file = _load(args)
+    key, start, stop, factor = _range(args, file)
+    b = jr.branch(file.scene, key, start, stop, n=args.n)
+    folds = jr.scene_folds(file.scene, key, start, stop, n=args.n, throw=False)
+    values = np.asarray(b.value) / factor
+    changes = [i for i in range(1, len(values)) if b.morse_index[i] != b.morse_index[i - 1]]
+    fold_values = [f.value / factor for f in folds]
+    out = {"vary": args.vary, "points": len(values),
+           "value": values.tolist(), "tip_angle_deg": np.degrees(b.tip).tolist(),
+           "stable": [bool(s) for s in b.stable],
+           "folds": [_fold(f, factor, file) for f in folds],
+           "stability_changes": [{"value": float(0.5 * (values[i - 1] + values[i])),
+                                  "morse_index": [int(b.morse_index[i - 1]),
+                                                  int(b.morse_index[i])],
+                                  "at_fold": any(abs(v - 0.5 * (values[i - 1] + values[i]))
+                                                 <= abs(values[i] - values[i - 1])
+                                                 for v in fold_values)}
+                                 for i in changes],
+           "status": [s.name.lower() for s in b.status], "complete": b.complete,
+           "converged": all(f.converged for f in folds)}
+    if args.out:
+        from jaxrod.cli._output import _output_dir
+
+        out_dir = _output_dir(args.out)
+        (out_dir / "branch.json").write_text(json.dumps(out, indent=1))
+        rows = np.column_stack([values, np.degrees(b.tip), b.min_eig, b.morse_index])
+        np.savetxt(out_dir / "branch.csv", rows, delimiter=",",
+                   header=f"{args.vary},tip_angle_deg,min_eig,morse_index", comments="")
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"{args.rig}: {len(values)} points along {args.vary} from {args.start:g} to "
+              f"{args.stop:g}; {len(folds)} folds, "
+              f"{sum(not c['at_fold'] for c in out['stability_changes'])} stability changes "
+              "without a fold")
+        for f in out["folds"]:
+            print(f"  fold at {args.vary} = {f['value']:.10g} (tip angle "
+                  f"{f['tip_angle_deg']:.6f} deg)")
+    return 0 if out["converged"] else 1
+
+
+def _fold(f, factor, file) -> dict:
+    return {"value": f.value / factor, **_at(f.tip_angle_deg, f.tip_position, file),
+            "dF_dvalue": f.dF_dvalue * factor, "normal_form_c": f.normal_form_c,
+            "converged": f.converged, "residual_norm": f.residual_norm}
+
+
+def folds_on_file(args) -> int:
+    """``jaxrod folds RIG --vary KEY --from A --to B``: the folds met along the path, in
+    order."""
+    import jaxrod as jr
+
+    file = _load(args)
+    key, start, stop, factor = _range(args, file)
+    folds = jr.scene_folds(file.scene, key, start, stop, n=args.n, throw=False)
+    out = {"vary": args.vary, "folds": [_fold(f, factor, file) for f in folds],
+           "converged": all(f.converged for f in folds), "n": args.n}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"{args.rig}: {len(folds)} folds along {args.vary} from {args.start:g} to "
+              f"{args.stop:g}")
+        for f in out["folds"]:
+            print(f"  fold at {args.vary} = {f['value']:.10f} (tip angle "
+                  f"{f['tip_angle_deg']:.10f} deg)")
+    return 0 if out["converged"] else 1
+
+
+def add_equilibrium(sub) -> None:
+    e = sub.add_parser("equilibrium", help="the equilibrium of a rig given by a scene file")
+    add_scene_file_inputs(e, vary=False)
+    e.add_argument("--n", type=_degree("N-magnet"), default=16,
+                   help="Chebyshev degree, 4-64 (default 16)")
+    e.add_argument("--json", action="store_true", help="print one JSON object")
+    e.set_defaults(func=cmd_equilibrium)
+

@@ -1,0 +1,342 @@
+"""Scene files: a rig described in TOML (or JSON), read into a ``Scene`` and the map from the
+file's keys to the scene's inputs.
+
+A file in SI units (the default) or, with ``units = "nondimensional"``, in the groups:
+
+    [rod]            length (m), radius (m), youngs_modulus (Pa), support ("clamped" at the
+                     origin pointing along +z, or "pinned"), density (kg/m^3, with gravity)
+    [magnetisation]  kind = "hard" (remanent, fixed in the material; remanence in A/m along
+                     the tangent) or "soft" (the paper's wire, saturated along the tangent
+                     with polarity +d3; saturation in A/m)
+    [[field]]        kind = "uniform": B (T) or load (A_c M_r B L^2 / (E I)), angle_deg
+                     (from +z toward +x); a soft wire in a uniform field: A (the paper's
+                     anisotropy group), angle_deg;
+                     kind = "dipole": a point magnet, by moment (A m^2) or remanence (A/m) and
+                     diameter (m) of a sphere, or M (the paper's dipole group), at
+                     position = [x, z] with moment_direction = [ux, uz], or on the paper's
+                     circle: path = "circle", radius (the paper's D), angle_deg (alpha; the
+                     moment radially outward)
+    [gravity]        g (m/s^2, along -z: the rod standing up) or G (rho g A_c L^3 / (E I))
+
+and top-level ``geometry = "planar"`` (default) or ``"3d"``. The terms of the scene are
+``bending``, ``gravity`` and ``field0``, ``field1``, ...; a file key names an input by its
+dotted path (``field.0.angle_deg``, ``field.0.position.0``, ``gravity.g``), which maps to a
+scene input by a constant factor (``FileScene.input_of``). Lengths of the scene are in rod
+lengths; ``FileScene.length`` converts them back to the file's unit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from jaxrod.params import MU0, ParameterError
+from jaxrod.scenes.scene import Scene
+from jaxrod.scenes.terms import Anisotropy, Bending, Dipole, Gravity, PointDipole, Zeeman
+
+#: Allowed keys of each table, SI and nondimensional.
+TABLES = {
+    "rod": {"si": ("length", "radius", "youngs_modulus", "support", "density"),
+            "nondimensional": ("support",)},
+    "magnetisation": {"si": ("kind", "remanence", "saturation"),
+                      "nondimensional": ("kind",)},
+    "gravity": {"si": ("g",), "nondimensional": ("G",)},
+}
+FIELD_KEYS = {
+    "uniform": {"si": ("kind", "B", "angle_deg"),
+                "nondimensional": ("kind", "load", "A", "angle_deg")},
+    "dipole": {"si": ("kind", "moment", "remanence", "diameter", "position",
+                      "moment_direction", "path", "radius", "angle_deg"),
+               "nondimensional": ("kind", "M", "position", "moment_direction", "path",
+                                  "radius", "angle_deg")},
+}
+TOP = ("units", "geometry", "rod", "magnetisation", "field", "gravity")
+
+#: Plausible SI magnitudes: a value outside is a unit slip (a 30 T field, a 3 km rod).
+SI_LIMITS = {"length": (1e-6, 100.0, "m"), "radius": (1e-8, 1.0, "m"),
+             "youngs_modulus": (1.0, 1e13, "Pa"), "density": (0.0, 1e5, "kg/m^3"),
+             "remanence": (0.0, 1e7, "A/m"), "saturation": (0.0, 1e7, "A/m"),
+             "B": (0.0, 5.0, "T"), "g": (0.0, 1e4, "m/s^2"), "moment": (0.0, 1e6, "A m^2"),
+             "diameter": (0.0, 10.0, "m")}
+
+
+def _fail(key: str, message: str):
+    raise ParameterError(f"{key}: {message}")
+
+
+def _unknown(where: str, key: str, allowed) -> None:
+    near = difflib.get_close_matches(key, list(allowed), n=1)
+    hint = f" (did you mean {near[0]!r}?)" if near else ""
+    _fail(f"{where}{key}", f"unknown key{hint}; valid here: {', '.join(allowed)}")
+
+
+def _number(data: dict, key: str, where: str, required: bool = True, default=None):
+    if key not in data:
+        if required:
+            _fail(f"{where}{key}", "missing")
+        return default
+    v = data[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        _fail(f"{where}{key}", f"must be a finite number, got {v!r}")
+    lo_hi = SI_LIMITS.get(key)
+    if lo_hi is not None and where != "" and not lo_hi[0] <= abs(v) <= lo_hi[1] \
+            and data.get("_units") == "si":
+        _fail(f"{where}{key}", f"{v:g} {lo_hi[2]} is outside the plausible {lo_hi[0]:g} to "
+                               f"{lo_hi[1]:g} {lo_hi[2]}: a unit slip? (SI units; or set "
+                               "units = \"nondimensional\")")
+    return float(v)
+
+
+def _vector(data: dict, key: str, where: str, default):
+    if key not in data:
+        return default
+    v = data[key]
+    if not isinstance(v, list) or len(v) != 2 or not all(
+            isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
+            for c in v):
+        _fail(f"{where}{key}", f"must be two finite numbers [x, z], got {v!r}")
+    return [float(c) for c in v]
+
+
+@dataclasses.dataclass(frozen=True)
+class FileScene:
+    """A scene read from a file: the ``Scene``, the file keys that are scalar inputs
+    (``inputs``: file key -> (scene key, factor), scene value = factor * file value), the
+    rod's length in the file's unit (1 when nondimensional) and the parsed file."""
+
+    scene: Scene
+    inputs: dict
+    length: float
+    data: dict
+
+    def input_of(self, key: str) -> tuple[str, float]:
+        """(scene key, factor) of the file key ``key``; ParameterError naming the nearest
+        valid key when it is not a scalar input."""
+        if key not in self.inputs:
+            near = difflib.get_close_matches(key, list(self.inputs), n=1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            raise ParameterError(f"vary: {key!r} is not a scalar input of this scene file"
+                                 f"{hint}; its inputs: {', '.join(self.inputs)}")
+        return self.inputs[key]
+
+    def value(self, key: str) -> float:
+        scene_key, factor = self.input_of(key)
+        return float(np.asarray(self.scene.value(scene_key))) / factor
+
+
+def _toml():
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        raise ParameterError("TOML scene files and --set need Python >= 3.11 (tomllib); give "
+                             "the scene as a .json file") from None
+    return tomllib
+
+
+def read(path: str | Path) -> dict:
+    """The parsed file (TOML, or JSON for a .json file)."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as err:
+        raise ParameterError(f"scene file {str(path)!r}: {err.strerror}") from None
+    try:
+        if path.suffix.lower() == ".json":
+            return json.loads(text)
+        return _toml().loads(text)
+    except (ValueError, json.JSONDecodeError) as err:
+        raise ParameterError(f"scene file {path.name}: not valid "
+                             f"{'JSON' if path.suffix.lower() == '.json' else 'TOML'}: "
+                             f"{err}") from None
+
+
+def apply_settings(data: dict, settings: list[str]) -> dict:
+    """``data`` with ``KEY=VALUE`` overrides (dotted keys, list indices as numbers; the value
+    parsed as a TOML value: numbers, strings in quotes, [x, z])."""
+    import copy
+
+    data = copy.deepcopy(data)
+    for item in settings:
+        key, sep, text = item.partition("=")
+        if not sep:
+            raise ParameterError(f"set: give KEY=VALUE, got {item!r}")
+        try:
+            value = _toml().loads(f"v = {text}")["v"]
+        except ValueError:
+            value = text  # a bare word: a string
+        node, parts = data, key.strip().split(".")
+        for i, part in enumerate(parts[:-1]):
+            node = node[int(part)] if isinstance(node, list) and part.isdigit() \
+                else node.setdefault(part, {}) if isinstance(node, dict) else None
+            if node is None:
+                raise ParameterError(f"set: {key!r} does not name an entry of the file")
+        last = parts[-1]
+        if isinstance(node, list) and last.isdigit() and int(last) < len(node):
+            node[int(last)] = value
+        elif isinstance(node, dict):
+            node[last] = value
+        else:
+            raise ParameterError(f"set: {key!r} does not name an entry of the file")
+    return data
+
+
+def scene_from(data: dict) -> FileScene:
+    """The scene of a parsed file (module docstring); ParameterError naming the key for
+    unknown keys (with the nearest valid one), missing entries, unit slips and a magnet
+    within the rod's reach."""
+    if not isinstance(data, dict):
+        raise ParameterError("scene file: must hold tables ([rod], [[field]], ...)")
+    for key in data:
+        if key not in TOP:
+            _unknown("", key, TOP)
+    units = data.get("units", "SI")
+    if units not in ("SI", "si", "nondimensional"):
+        _fail("units", f"must be \"SI\" or \"nondimensional\", got {units!r}")
+    si = units.lower() == "si"
+    system = "si" if si else "nondimensional"
+    geometry = data.get("geometry", "planar")
+    if geometry not in ("planar", "3d"):
+        _fail("geometry", f"must be \"planar\" or \"3d\", got {geometry!r}")
+    tables = {}
+    for name in ("rod", "magnetisation", "gravity"):
+        table = data.get(name, {})
+        if not isinstance(table, dict):
+            _fail(name, "must be a table")
+        for key in table:
+            if key not in TABLES[name][system]:
+                _unknown(f"{name}.", key, TABLES[name][system])
+        tables[name] = dict(table, _units=system)
+    fields = data.get("field", [])
+    if not isinstance(fields, list):
+        _fail("field", "must be an array of tables ([[field]])")
+    for i, field in enumerate(fields):
+        if not isinstance(field, dict):
+            _fail(f"field.{i}", "must be a table")
+        if field.get("kind") not in FIELD_KEYS:
+            _fail(f"field.{i}.kind", f"must be one of {', '.join(FIELD_KEYS)}, got "
+                                     f"{field.get('kind')!r}")
+        for key in field:
+            if key not in FIELD_KEYS[field["kind"]][system]:
+                _unknown(f"field.{i}.", key, FIELD_KEYS[field["kind"]][system])
+    rod = tables["rod"]
+    support = rod.get("support", "clamped")
+    if support not in ("clamped", "pinned"):
+        _fail("rod.support", f"must be \"clamped\" or \"pinned\", got {support!r}")
+    inputs: dict[str, tuple[str, float]] = {}
+    terms = {"bending": Bending()}
+    if si:
+        L = _number(rod, "length", "rod.")
+        r = _number(rod, "radius", "rod.")
+        E = _number(rod, "youngs_modulus", "rod.")
+        if r >= L:
+            _fail("rod.radius", f"{r:g} m is not below the length {L:g} m: not a slender rod")
+        area, inertia = math.pi * r**2, math.pi * r**4 / 4.0
+        bending = E * inertia
+    else:
+        L = 1.0
+    if "gravity" in data:
+        g_table = tables["gravity"]
+        if si:
+            rho = _number(rod, "density", "rod.")
+            per_g = rho * area * L**3 / bending
+            g = _number(g_table, "g", "gravity.")
+            terms["gravity"] = Gravity(per_g * g)
+            inputs["gravity.g"] = ("gravity.G", per_g)
+        else:
+            terms["gravity"] = Gravity(_number(g_table, "G", "gravity."))
+            inputs["gravity.G"] = ("gravity.G", 1.0)
+    mag = tables["magnetisation"]
+    kind = mag.get("kind")
+    if fields and kind not in ("hard", "soft"):
+        _fail("magnetisation.kind", f"must be \"hard\" or \"soft\", got {kind!r}")
+    if si and fields:
+        m_key = "remanence" if kind == "hard" else "saturation"
+        magnetisation = _number(mag, m_key, "magnetisation.")
+    for i, field in enumerate(fields):
+        where = f"field.{i}."
+        fkind = field["kind"]
+        field = dict(field, _units=system)
+        name = f"field{i}"
+        angle = math.radians(_number(field, "angle_deg", where, required=False, default=0.0))
+        if fkind == "uniform":
+            if not si and "A" in field:
+                if kind != "soft":
+                    _fail(f"{where}A", "the anisotropy group is the soft wire's "
+                                       "(magnetisation.kind = \"soft\")")
+                terms[name] = Anisotropy(_number(field, "A", where), _direction(angle))
+                inputs[f"{where}A"] = (f"{name}.A", 1.0)
+                continue
+            if si:
+                per_b = area * magnetisation * L**2 / bending
+                terms[name] = Zeeman(per_b * _number(field, "B", where), angle)
+                inputs[f"{where}B"] = (f"{name}.load", per_b)
+            else:
+                terms[name] = Zeeman(_number(field, "load", where), angle)
+                inputs[f"{where}load"] = (f"{name}.load", 1.0)
+            inputs[f"{where}angle_deg"] = (f"{name}.angle", math.pi / 180.0)
+            continue
+        # a dipole
+        if si:
+            if "moment" in field:
+                moment = _number(field, "moment", where)
+            else:
+                a = 0.5 * _number(field, "diameter", where)
+                moment = 4.0 / 3.0 * math.pi * a**3 * _number(field, "remanence", where)
+            per_m = area * magnetisation * MU0 / (4.0 * math.pi * bending * L)
+            M = per_m * moment
+            m_key, m_factor = ("moment", per_m) if "moment" in field else (None, None)
+        else:
+            M = _number(field, "M", where)
+            m_key, m_factor = "M", 1.0
+        if m_key is not None:
+            inputs[f"{where}{m_key}"] = (f"{name}.M", m_factor)
+        half = 0.5 * field["diameter"] / L if si and "diameter" in field else 0.0
+        if field.get("path") == "circle":
+            for key in ("position", "moment_direction"):
+                if key in field:
+                    _fail(f"{where}{key}", "a magnet on the circle has its position and "
+                                           "moment from radius and angle_deg")
+            D = _number(field, "radius", where) / L
+            if D <= 1.0 + half:
+                _fail(f"{where}radius", f"the magnet ({D:g} rod lengths from the clamp) is "
+                                        "within the rod's reach (radius > length + magnet "
+                                        "radius)")
+            terms[name] = Dipole(M, D, angle)
+            inputs[f"{where}radius"] = (f"{name}.D", 1.0 / L)
+            inputs[f"{where}angle_deg"] = (f"{name}.alpha", math.pi / 180.0)
+            continue
+        if "path" in field:
+            _fail(f"{where}path", f"must be \"circle\" (or omitted), got {field['path']!r}")
+        for key in ("radius", "angle_deg"):
+            if key in field:
+                _fail(f"{where}{key}", "belongs to path = \"circle\"; a free magnet takes "
+                                       "position and moment_direction")
+        pos = _vector(field, "position", where, None)
+        if pos is None:
+            _fail(f"{where}position", "missing (or give path = \"circle\")")
+        c = np.array([pos[0], 0.0, pos[1]]) / L
+        if np.linalg.norm(c) <= 1.0 + half:
+            _fail(f"{where}position", f"the magnet ({np.linalg.norm(c):g} rod lengths from the "
+                                      "clamp) is within the rod's reach")
+        u = _vector(field, "moment_direction", where, [0.0, 1.0])
+        if math.hypot(*u) == 0.0:
+            _fail(f"{where}moment_direction", "must not be zero")
+        terms[name] = PointDipole(M, c, np.array([u[0], 0.0, u[1]]))
+        inputs[f"{where}position.0"] = (f"{name}.position.0", 1.0 / L)
+        inputs[f"{where}position.1"] = (f"{name}.position.2", 1.0 / L)
+    scene = Scene(terms, geometry=geometry, support=support)
+    return FileScene(scene, inputs, L, data)
+
+
+def _direction(angle: float):
+    return np.array([math.sin(angle), 0.0, math.cos(angle)])
+
+
+def load(path: str | Path, settings: list[str] = ()) -> FileScene:
+    """The scene of the file at ``path``, with ``KEY=VALUE`` overrides (``apply_settings``)."""
+    return scene_from(apply_settings(read(path), list(settings)))

@@ -1,0 +1,238 @@
+"""Scene files and the hard-magnetic rod: a cantilever in a uniform field against shooting
+with scipy (an independent method), its snap when the field rotates, the paper's rig
+written as a file against the paper's own fold path, and bad files."""
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq, fsolve
+
+import jaxrod as jr
+from jaxrod.params import ParameterError
+from jaxrod.scenes.files import load, scene_from
+
+pytestmark = pytest.mark.xdist_group("scene_files")
+
+CANTILEVER = """
+[rod]
+length = 0.05           # m
+radius = 0.5e-3         # m
+youngs_modulus = 1.0e6  # Pa
+support = "clamped"     # at the origin, pointing along +z
+[magnetisation]
+kind = "hard"
+remanence = 1.0e5       # A/m, along the tangent
+[[field]]
+kind = "uniform"
+B = 1.25e-3             # T
+angle_deg = 90          # from +z toward +x
+"""
+LAMBDA_PER_TESLA = 4000.0  # A_c M_r L^2 / (E I) for the file above: B = 1.25 mT gives 5
+
+
+@pytest.fixture(scope="module")
+def cantilever(tmp_path_factory):
+    path = tmp_path_factory.mktemp("rigs") / "cantilever.toml"
+    path.write_text(CANTILEVER)
+    return path
+
+
+# -- the independent reference: shooting on theta'' + G (1 - s) sin theta
+#    + lam sin(a - theta) = 0, theta(0) = 0, theta'(1) = 0 -----------------------------------
+
+def _shoot(k, lam, a, G):
+    def f(s, y):
+        return [y[1], -lam * math.sin(a - y[0]) - G * (1 - s) * math.sin(y[0]),
+                math.sin(y[0]), math.cos(y[0])]
+    sol = solve_ivp(f, (0.0, 1.0), [0.0, k, 0.0, 0.0], method="DOP853", rtol=1e-13,
+                    atol=1e-14)
+    return sol.y[:, -1]
+
+
+def shooting_equilibria(lam, a, G=0.0, k_max=12.0, count=241):
+    """Every equilibrium with |theta'(0)| <= k_max: (tip tangent deg, X1, X3) per root of
+    theta'(1; k) = 0, bracketed on a grid of k and refined by brentq."""
+    ks = np.linspace(-k_max, k_max, count)
+    end = [_shoot(k, lam, a, G)[1] for k in ks]
+    out = []
+    for k0, k1, f0, f1 in zip(ks[:-1], ks[1:], end[:-1], end[1:]):
+        if f0 * f1 < 0:
+            k = brentq(lambda k: _shoot(k, lam, a, G)[1], k0, k1, xtol=1e-15, rtol=1e-15)
+            y = _shoot(k, lam, a, G)
+            out.append((math.degrees(y[0]), y[2], y[3]))
+    return out
+
+
+@pytest.mark.parametrize("angle_deg, load, g", [
+    (30.0, 1.0, 0.0), (90.0, 5.0, 0.0), (150.0, 10.0, 0.0), (179.5, 20.0, 0.0),
+    (120.0, 20.0, 0.0), (90.0, 5.0, 9.81), (179.5, 3.0, 9.81)])
+def test_hard_magnetic_cantilever_against_shooting(cantilever, angle_deg, load, g):
+    """Tip tangent angle and tip position of the scene file's cantilever (SI, gravity from
+    the rod's density) against shooting, 1e-9 degrees and 1e-11 rod lengths; the equilibrium
+    reached by the ramp is stable."""
+    settings = [f"field.0.angle_deg={angle_deg}", f"field.0.B={load / LAMBDA_PER_TESLA}"]
+    if g:
+        settings += ["rod.density=100", f"gravity.g={g}"]  # G = 1.96
+    file = load_file(cantilever, settings)
+    G = float(file.scene.terms["gravity"].G) if g else 0.0
+    eq = jr.equilibrium(file.scene, n=32)
+    assert eq.converged and eq.stable, eq.status
+    refs = shooting_equilibria(load, math.radians(angle_deg), G)
+    ref = min(refs, key=lambda r: abs(r[0] - eq.tip_tangent_deg))
+    assert abs(eq.tip_tangent_deg - ref[0]) <= 1e-9
+    X = eq.tip_position * file.length
+    assert abs(X[0] / file.length - ref[1]) <= 1e-11 and abs(X[2] / file.length - ref[2]) <= 1e-11
+    assert abs(eq.tip_angle_deg - math.degrees(math.atan2(ref[1], ref[2]))) <= 1e-9
+
+
+def load_file(path, settings):
+    return load(path, settings)
+
+
+def test_spectral_convergence_of_the_tip_angle(cantilever):
+    """Error of the tip angle against shooting falls spectrally with N (to round-off)."""
+    file = load_file(cantilever, ["field.0.angle_deg=150", "field.0.B=2.5e-3"])
+    ref = shooting_equilibria(10.0, math.radians(150.0))
+    errors = []
+    for n in (6, 10, 14, 20, 28):
+        eq = jr.equilibrium(file.scene, n=n)
+        errors.append(min(abs(eq.tip_tangent_deg - r[0]) for r in ref))
+    assert errors[0] > 1e-6 and errors[-1] < 1e-10
+    assert all(b < a or b < 1e-10 for a, b in zip(errors, errors[1:]))
+
+
+def _fold_by_shooting(lam, a0, k0):
+    """A fold in the field angle by shooting: theta'(1; k, a) = 0 and d theta'(1)/dk = 0
+    (central differences in k), solved by fsolve from (k0, a0)."""
+    h = 1e-5
+
+    def F(v):
+        k, a = v
+        f = lambda kk: _shoot(kk, lam, a, 0.0)[1]
+        return [f(k), (f(k + h) - f(k - h)) / (2 * h)]
+
+    k, a = fsolve(F, [k0, a0], xtol=1e-13)
+    return math.degrees(a)
+
+
+def test_snap_when_the_field_rotates_round_the_cantilever(cantilever):
+    """Load 5, the field rotating from 90 degrees: the bent rod follows it past 180 degrees
+    and snaps at a fold; the fold's angle against shooting to 1e-7 degrees (the reference's
+    central differences in k limit it), and its tip angle the mirror image of the fold met
+    on the way back."""
+    file = load_file(cantilever, ["field.0.B=1.25e-3"])
+    key, factor = file.input_of("field.0.angle_deg")
+    folds = jr.scene_folds(file.scene, key, factor * 90.0, factor * 359.0, n=24)
+    assert len(folds) == 2 and all(f.converged for f in folds)
+    up, down = (f.value / factor for f in folds)
+    assert abs(up + down - 360.0) <= 1e-9  # the mirror symmetry a -> 2 pi - a
+    ref = _fold_by_shooting(5.0, math.radians(up + 0.5), 1.5)
+    assert abs(up - ref) <= 1e-7
+
+
+def test_pitchfork_of_the_opposed_field_is_a_stability_change_without_fold(cantilever):
+    """Field opposite the magnetisation: the straight rod loses stability at load pi^2/4
+    with no fold (a pitchfork); the branch brackets it."""
+    file = load_file(cantilever, ["field.0.angle_deg=180"])
+    key, factor = file.input_of("field.0.B")
+    b = jr.branch(file.scene, key, 0.0, factor * 1e-3, n=16)
+    i = int(np.argmax(b.morse_index > 0))
+    assert i > 0 and b.value[i - 1] < math.pi**2 / 4 < b.value[i]
+    assert not jr.scene_folds(file.scene, key, 0.0, factor * 1e-3, n=16, throw=False)
+
+
+PAPER_RIG = """
+units = "nondimensional"
+[magnetisation]
+kind = "soft"
+[gravity]
+G = {G!r}
+[[field]]
+kind = "dipole"
+path = "circle"
+M = {M!r}
+radius = {D!r}
+angle_deg = 0
+"""
+
+
+def test_the_papers_rig_as_a_scene_file_gives_the_papers_folds(tmp_path):
+    from jaxrod.magnet.diagram import make_scene
+    from jaxrod.magnet.folds import locate_folds
+    from jaxrod.params import NDFEB_MAGNET, preset
+
+    rod, _ = preset("permanent-magnet")
+    G, M, D = rod.G, rod.M(NDFEB_MAGNET), rod.D(NDFEB_MAGNET)
+    path = tmp_path / "paper.toml"
+    path.write_text(PAPER_RIG.format(G=G, M=M, D=D))
+    file = load(path)
+    key, factor = file.input_of("field.0.angle_deg")
+    found = jr.scene_folds(file.scene, key, 0.0, factor * 90.0, n=16)
+    paper = locate_folds(make_scene(G, M, D), n=16)
+    assert len(found) == len(paper.folds) == 2
+    for f, p in zip(sorted(found, key=lambda f: f.value), paper.folds):
+        assert abs(f.value / factor - p.alpha_deg) <= 1e-10
+
+
+def _cli(*argv):
+    return subprocess.run([sys.executable, "-m", "jaxrod.cli", *argv], capture_output=True,
+                          text=True, timeout=600, env={**__import__("os").environ,
+                                                       "JAXROD_NO_CACHE": "1"})
+
+
+def test_cli_equilibrium_and_folds_on_a_scene_file(cantilever):
+    proc = _cli("equilibrium", str(cantilever), "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    ref = min(shooting_equilibria(5.0, math.radians(90.0)),
+              key=lambda r: abs(r[0] - out["tip_tangent_deg"]))
+    assert abs(out["tip_tangent_deg"] - ref[0]) <= 1e-8
+    assert abs(out["tip_position"][0] - 0.05 * ref[1]) <= 1e-12
+    assert out["stable"] and out["converged"]
+    proc = _cli("folds", str(cantilever), "--vary", "field.0.angle_deg", "--from", "90",
+                "--to", "359", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["vary"] == "field.0.angle_deg" and len(out["folds"]) == 2 and out["converged"]
+    assert {"value", "tip_angle_deg"} <= set(out["folds"][0])
+
+
+BAD = [
+    ("[rod]\nlenght = 0.05\n", "rod.lenght", "length"),
+    (CANTILEVER.replace("youngs_modulus = 1.0e6  # Pa\n", ""), "rod.youngs_modulus", "missing"),
+    (CANTILEVER.replace("B = 1.25e-3", "B = 30.0"), "field.0.B", "unit slip"),
+    (CANTILEVER.replace("length = 0.05", "length = 3000.0"), "rod.length", "unit slip"),
+    (CANTILEVER.replace('kind = "uniform"\nB = 1.25e-3             # T\nangle_deg = 90',
+                        'kind = "dipole"\nmoment = 1.0\nposition = [0.01, 0.03]'),
+     "field.0.position", "reach"),
+    (CANTILEVER.replace('kind = "hard"', 'kind = "permanent"'), "magnetisation.kind", "hard"),
+    ("[rod]\nlength = 0.05\n[[field]]\nkind = \"uniform\"\nB = 1e-3\nangel_deg = 90\n",
+     "field.0.angel_deg", "angle_deg"),
+]
+
+
+@pytest.mark.parametrize("text, key, words", BAD)
+def test_bad_scene_files_name_the_key(text, key, words, tmp_path):
+    import tomllib
+
+    with pytest.raises(ParameterError, match=key.replace(".", r"\.")) as err:
+        scene_from(tomllib.loads(text))
+    assert words in str(err.value)
+
+
+def test_bad_scene_files_exit_2_with_one_line(cantilever, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(BAD[2][0])
+    for argv, word in [(("equilibrium", str(bad)), "field.0.B"),
+                       (("folds", str(cantilever), "--vary", "rod.length", "--from", "0.04",
+                         "--to", "0.06"), "rod.length"),
+                       (("equilibrium", str(cantilever), "--set", "field.0.B=3e3"), "B"),
+                       (("equilibrium", str(tmp_path / "missing.toml")), "missing.toml")]:
+        proc = _cli(*argv)
+        lines = proc.stderr.strip().splitlines()
+        assert proc.returncode == 2 and len(lines) == 1 and word in lines[0], proc.stderr
