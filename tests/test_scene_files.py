@@ -236,3 +236,26 @@ def test_bad_scene_files_exit_2_with_one_line(cantilever, tmp_path):
         proc = _cli(*argv)
         lines = proc.stderr.strip().splitlines()
         assert proc.returncode == 2 and len(lines) == 1 and word in lines[0], proc.stderr
+
+
+def test_the_shipped_permanent_magnet_rig_in_si_gives_the_presets_folds():
+    """The paper's experiment as the shipped SI scene file: the same folds as
+    ``jaxrod folds --preset permanent-magnet`` (the groups from the physical inputs) to
+    1e-10 degrees; the shipped rigs all load."""
+    from jaxrod.magnet.diagram import make_scene
+    from jaxrod.magnet.folds import locate_folds
+    from jaxrod.params import NDFEB_MAGNET, preset
+    from jaxrod.scenes.files import presets
+
+    assert {"permanent-magnet", "hard-magnetic-cantilever"} <= set(presets())
+    file = load("permanent-magnet")
+    rod, _ = preset("permanent-magnet")
+    paper = locate_folds(make_scene(rod.G, rod.M(NDFEB_MAGNET), rod.D(NDFEB_MAGNET)), n=16)
+    key, factor = file.input_of("field.0.angle_deg")
+    found = sorted(jr.scene_folds(file.scene, key, 0.0, factor * 90.0, n=16),
+                   key=lambda f: f.value)
+    assert len(found) == len(paper.folds) == 2
+    for f, p in zip(found, paper.folds):
+        assert abs(f.value / factor - p.alpha_deg) <= 1e-10
+        assert abs(f.tip_angle_deg - p.tip_deg) <= 1e-9
+    assert load("hard-magnetic-cantilever").scene.terms["field0"].load == pytest.approx(5.0)

@@ -337,6 +337,19 @@ def _direction(angle: float):
     return np.array([math.sin(angle), 0.0, math.cos(angle)])
 
 
+#: The rigs that ship as scene files (``presets()``), by name.
+RIGS = Path(__file__).resolve().parent.parent / "rigs"
+
+
+def presets() -> list[str]:
+    """The names of the rigs that ship with jaxrod (``load`` takes a name for a path)."""
+    return sorted(p.stem for p in RIGS.glob("*.toml"))
+
+
 def load(path: str | Path, settings: list[str] = ()) -> FileScene:
-    """The scene of the file at ``path``, with ``KEY=VALUE`` overrides (``apply_settings``)."""
+    """The scene of the file at ``path`` (or of the shipped rig of that name, ``presets``),
+    with ``KEY=VALUE`` overrides (``apply_settings``)."""
+    path = Path(path)
+    if not path.exists() and str(path) in presets():
+        path = RIGS / f"{path}.toml"
     return scene_from(apply_settings(read(path), list(settings)))
