@@ -16,8 +16,6 @@ import jaxrod as jr
 from jaxrod.params import ParameterError
 from jaxrod.scenes.files import load, scene_from
 
-pytestmark = pytest.mark.xdist_group("scene_files")
-
 CANTILEVER = """
 [rod]
 length = 0.05           # m

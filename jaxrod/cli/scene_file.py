@@ -84,32 +84,31 @@ def cmd_equilibrium(args) -> int:
 
 
 def branch_on_file(args) -> int:
-    """``jaxrod branch RIG --vary KEY --from A --to B``: the branch's points, folds and
-    stability changes (JSON with --json; branch.csv and branch.json with --out)."""
+    """``jaxrod branch RIG --vary KEY --from A --to B``: the branch's points, its folds and
+    its branch points (JSON with --json; branch.csv and branch.json with --out)."""
     import numpy as np
 
     import jaxrod as jr
 
     file = _load(args)
     key, start, stop, factor = _range(args, file)
+    from jaxrod.equilibria.branch_points import refine_branch_points
+    from jaxrod.equilibria.folds import refine
+
     b = jr.branch(file.scene, key, start, stop, n=args.n)
-    folds = jr.scene_folds(file.scene, key, start, stop, n=args.n, throw=False)
+    folds = refine(file.scene, b, n=args.n)
+    points = refine_branch_points(file.scene, b, n=args.n)
     values = np.asarray(b.value) / factor
-    changes = [i for i in range(1, len(values)) if b.morse_index[i] != b.morse_index[i - 1]]
-    fold_values = [f.value / factor for f in folds]
     out = {"vary": args.vary, "points": len(values),
            "value": values.tolist(), "tip_angle_deg": np.degrees(b.tip).tolist(),
            "stable": [bool(s) for s in b.stable],
            "folds": [_fold(f, factor, file) for f in folds],
-           "stability_changes": [{"value": float(0.5 * (values[i - 1] + values[i])),
-                                  "morse_index": [int(b.morse_index[i - 1]),
-                                                  int(b.morse_index[i])],
-                                  "at_fold": any(abs(v - 0.5 * (values[i - 1] + values[i]))
-                                                 <= abs(values[i] - values[i - 1])
-                                                 for v in fold_values)}
-                                 for i in changes],
+           "branch_points": [{"value": p.value / factor,
+                              **_at(p.tip_angle_deg, p.tip_position, file),
+                              "morse_index": list(p.morse_index), "converged": p.converged,
+                              "residual_norm": p.residual_norm} for p in points],
            "status": [s.name.lower() for s in b.status], "complete": b.complete,
-           "converged": all(f.converged for f in folds)}
+           "converged": all(f.converged for f in folds) and all(p.converged for p in points)}
     if args.out:
         from jaxrod.cli._output import _output_dir
 
@@ -122,12 +121,11 @@ def branch_on_file(args) -> int:
         print(json.dumps(out))
     else:
         print(f"{args.rig}: {len(values)} points along {args.vary} from {args.start:g} to "
-              f"{args.stop:g}; {len(folds)} folds, "
-              f"{sum(not c['at_fold'] for c in out['stability_changes'])} stability changes "
-              "without a fold")
-        for f in out["folds"]:
-            print(f"  fold at {args.vary} = {f['value']:.10g} (tip angle "
-                  f"{f['tip_angle_deg']:.6f} deg)")
+              f"{args.stop:g}; {len(folds)} folds, {len(points)} branch points")
+        for kind, items in (("fold", out["folds"]), ("branch point", out["branch_points"])):
+            for f in items:
+                print(f"  {kind} at {args.vary} = {f['value']:.10g} (tip angle "
+                      f"{f['tip_angle_deg']:.6f} deg)")
     return 0 if out["converged"] else 1
 
 

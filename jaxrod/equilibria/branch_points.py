@@ -1,0 +1,211 @@
+"""Branch points of any scene along any input: where stability changes without a fold, and
+the branch that bifurcates there.
+
+On a branch of grad E(x; v) = 0 the Morse index (the number of negative Hessian eigenvalues)
+changes where an eigenvalue crosses zero. Where the branch also turns back in v that is a
+fold (``jaxrod.equilibria.folds``); where it goes on, it is a branch point: a symmetry-
+breaking pitchfork (the straight rod under an opposed field, or the paper's uniform field).
+Each is refined by Moore's augmented system for a simple bifurcation point (Moore, SIAM J.
+Numer. Anal. 1980), with the Hessian symmetric,
+
+    grad E(x; v) + mu phi = 0,   H phi = 0,   l . phi = 1,   phi . d(grad E)/dv = 0,
+
+in (x, v, phi, mu): regular at simple branch points (pitchforks and transcritical points),
+where the fold's Moore-Spence system is singular along the bifurcating direction; mu = 0 at
+the solution (reported as ``unfolding``). A stability change that is a fold (the last
+equation cannot hold: ``jaxrod.equilibria.folds``) does not converge and is left out.
+
+The bifurcating branch starts at x* + eps phi: (x, v) solves grad E = 0 with
+phi . (x - x*) = eps |phi|^2 (Newton in n + 1 unknowns), and pseudo-arclength continuation
+goes on from there, away from the branch point (``bifurcated_branch``; AUTO-07p's and
+BifurcationKit's branch switching, here by the bordered corrector).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.derivatives import Structured
+from jaxrod.equilibria.branch import _observed, branch, branch_options, check_range
+from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
+from jaxrod.equilibria.folds import _span
+from jaxrod.equilibria.record import Branch, branch_from_runs
+from jaxrod.params import ParameterError
+from jaxrod.programs import jit
+from jaxrod.scenes.scene import Input, Scene
+from jaxrod.solvers.continuation import continuation_run
+from jaxrod.solvers.newton import newton
+from jaxrod.status import SolverError, Status
+
+
+@dataclasses.dataclass(frozen=True)
+class BranchPoint:
+    """A branch point of a scene's branch in the input ``vary``, refined by Moore-Spence.
+
+    ``value``: the input there; ``tip_angle_deg`` (the tip's direction from +z toward +x)
+    and ``tip_position`` of the state; ``null_vector``: the Hessian's kernel (the
+    bifurcating branch's direction), normalised by int phi = 1 where that is not zero;
+    ``unfolding``: mu of the augmented system (zero at the solution, to round-off);
+    ``morse_index``: the index before and after it along the branch.
+    """
+
+    vary: str
+    value: float
+    tip_angle_deg: float
+    tip_position: np.ndarray
+    state: np.ndarray
+    null_vector: np.ndarray
+    unfolding: float
+    morse_index: tuple[int, int]
+    converged: bool
+    residual_norm: float
+    iterations: int
+    status: Status
+
+    def as_dict(self) -> dict:
+        return {"value": self.value, "tip_angle_deg": self.tip_angle_deg,
+                "tip_position": [float(v) for v in self.tip_position],
+                "unfolding": self.unfolding, "morse_index": list(self.morse_index),
+                "converged": self.converged, "residual_norm": self.residual_norm,
+                "iterations": self.iterations}
+
+
+def stability_changes(b: Branch) -> np.ndarray:
+    """i such that the Morse index changes between points i and i + 1 with no fold there."""
+    change = np.nonzero(b.morse_index[1:] != b.morse_index[:-1])[0]
+    return np.setdiff1d(change, b.fold_indices)
+
+
+def _bp_residual(z, args):
+    model, margs, ell = args
+    m = ell.shape[0]
+    x, phi, lam, mu = z[:m], z[m:2 * m], z[2 * m], z[2 * m + 1]
+    F, H, F_lam = model.linearisation(x, lam, margs)
+    return jnp.concatenate([F + mu * phi, H @ phi, jnp.stack([jnp.dot(ell, phi) - 1.0,
+                                                              jnp.dot(phi, F_lam)])])
+
+
+def _refine_one(x0, lam0, scene, disc, origin, span, vary):
+    model = Structured(Input(vary))
+    margs = (scene, disc, origin, span)
+    phi0 = jnp.linalg.eigh(model.hessian(x0, lam0, margs))[1][:, 0]
+    ell = phi0 / jnp.dot(phi0, phi0)
+    z0 = jnp.concatenate([x0, phi0, jnp.stack([lam0, jnp.zeros_like(lam0)])])
+    res = newton(_bp_residual, z0, (model, margs, ell), tol=1e-12)
+    m = x0.shape[0]
+    x, phi, lam = res.x[:m], res.x[m:2 * m], res.x[2 * m]
+    scale = mean_functional(disc)(phi)
+    phi = jnp.where(jnp.abs(scale) > 1e-8, phi / scale, phi)
+    angle, X = tip(scene.replace(vary, origin + span * lam), x, disc)
+    return res, (x, phi, lam, res.x[2 * m + 1], angle, X)
+
+
+_refine = jit(jax.vmap(_refine_one, in_axes=(0, 0, None, None, None, None, None)),
+              static_argnames=("vary",))
+
+
+def refine_branch_points(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[BranchPoint]:
+    """The branch points detected on ``b`` (``stability_changes``), refined in the order met
+    (module docstring); a change where the augmented system does not converge (a fold the
+    branch's sampling did not show as a turn) is reported with ``converged`` False."""
+    idx = stability_changes(b)
+    if len(idx) == 0:
+        return []
+    disc = discretise(scene, n)
+    origin, span = float(b.value[0]), _span(b)
+    pick = np.where(np.abs(b.min_eig[idx]) <= np.abs(b.min_eig[idx + 1]), idx, idx + 1)
+    res, (x, phi, lam, mu, angle, X) = jax.device_get(_refine(
+        jnp.asarray(b.theta[pick]), jnp.asarray((b.value[pick] - origin) / span), scene,
+        disc, origin, span, b.vary))
+    points = []
+    for i, j in enumerate(idx):
+        conv = bool(res.converged[i])
+        points.append(BranchPoint(
+            vary=b.vary, value=float(origin + span * lam[i]),
+            tip_angle_deg=math.degrees(float(angle[i])), tip_position=np.asarray(X[i]),
+            state=np.asarray(x[i]), null_vector=np.asarray(phi[i]), unfolding=float(mu[i]),
+            morse_index=(int(b.morse_index[j]), int(b.morse_index[j + 1])), converged=conv,
+            residual_norm=float(res.residual_norm[i]), iterations=int(res.iterations[i]),
+            status=Status.SUCCESS if conv else Status.NOT_CONVERGED))
+    return points
+
+
+def branch_points(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
+                  state=None, throw: bool = True) -> list[BranchPoint]:
+    """The branch points met along the branch of ``scene`` as ``vary`` goes from ``start``
+    to ``stop`` (in the order met), each refined by Moore-Spence (module docstring).
+
+    ``throw``: raise ``SolverError`` if a refinement does not converge.
+    """
+    start, stop = check_range(scene, vary, start, stop)
+    found = refine_branch_points(scene, branch(scene, vary, start, stop, n, state), n)
+    if throw:
+        for p in found:
+            if not p.converged:
+                raise SolverError(p.status, f"the branch point near {vary} = {p.value:.6g}")
+    return found
+
+
+def _switch_residual(y, args):
+    model, margs, x_star, phi, eps = args
+    x, lam = y[:-1], y[-1]
+    return jnp.append(model.gradient(x, lam, margs),
+                      jnp.dot(phi, x - x_star) / jnp.dot(phi, phi) - eps)
+
+
+def _switch_jacobian(y, args):
+    model, margs, x_star, phi, _ = args
+    _, H, g_lam = model.linearisation(y[:-1], y[-1], margs)
+    top = jnp.hstack([H, g_lam[:, None]])
+    return jnp.vstack([top, jnp.append(phi / jnp.dot(phi, phi), 0.0)[None, :]])
+
+
+def _bifurcated_program(scene, disc, origin, span, x_star, phi, eps, opts, capacity, vary):
+    model = Structured(Input(vary))
+    margs = (scene, disc, origin, span)
+    y0 = jnp.append(x_star + eps * phi, 0.0)
+    start = newton(_switch_residual, y0, (model, margs, x_star, phi, eps), tol=1e-12,
+                   jacobian=_switch_jacobian)
+    x1, lam1 = start.x[:-1], start.x[-1]
+    # continue away from the branch point: lam grows on a supercritical side, falls on a
+    # subcritical one
+    direction = jnp.where(lam1 >= 0.0, 1.0, -1.0)
+    run = continuation_run(model, x1, lam1, margs, opts, capacity, direction)
+    q, angle, energy, X = jax.vmap(
+        lambda x, lam: _observed(scene, disc, x, lam, origin, span, vary))(run.x, run.lam)
+    return run, (q, angle, energy), X, start.converged
+
+
+_bifurcated = jit(_bifurcated_program, static_argnames=("capacity", "vary"))
+
+
+def bifurcated_branch(scene: Scene, point: BranchPoint, stop: float, n: int = DEFAULT_N,
+                      side: int = 1, amplitude: float = 1e-3) -> Branch:
+    """The branch bifurcating at ``point``, on the ``side`` (+1 or -1: along or against the
+    null vector) of the branch it crosses, followed until ``vary`` reaches ``stop`` (or
+    turns back past the branch point's value). ``amplitude``: the first step along the null
+    vector, in its units (int phi = 1)."""
+    if side not in (1, -1):
+        raise ParameterError(f"side must be +1 or -1, got {side!r}")
+    start, stop = check_range(scene, point.vary, point.value, stop)
+    disc = discretise(scene, n)
+    opts = branch_options()
+    lo, hi = (0.0, 1.0) if stop > start else (0.0, 1.0)
+    opts = opts._replace(lam_min=lo - 1.0, lam_max=hi, max_points=0)
+    phi = jnp.asarray(point.null_vector)
+    run, observed, X, ok = jax.device_get(_bifurcated(
+        scene, disc, start, stop - start, jnp.asarray(point.state), phi, side * amplitude,
+        opts, 400, point.vary))
+    if not bool(ok):
+        raise SolverError(Status.NOT_CONVERGED, f"the first point of the branch bifurcating "
+                          f"at {point.vary} = {point.value:.6g}")
+    run = run._replace(lam=start + (stop - start) * run.lam,
+                       tangent_lam=(stop - start) * run.tangent_lam)
+    b = branch_from_runs([(run, False, observed)])
+    return dataclasses.replace(b, vary=point.vary,
+                               tip_position=np.asarray(X)[:int(run.num_points)])

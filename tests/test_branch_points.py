@@ -1,0 +1,79 @@
+"""Branch points: stability changes without a fold, refined by Moore's augmented system,
+and the branch that bifurcates there, against closed forms and shooting with scipy."""
+
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+from scipy.special import jv
+from test_scene_files import shooting_equilibria
+
+import jaxrod as jr
+from jaxrod.scenes.terms import Zeeman
+
+OPPOSED = jr.Scene({"bending": jr.Bending(), "field": Zeeman(0.0, math.pi)})
+
+
+@pytest.mark.parametrize("n", [8, 12, 16, 24])
+def test_the_opposed_field_buckles_the_cantilever_at_pi_squared_over_four(n):
+    """A hard-magnetic cantilever with the field opposite its magnetisation is the
+    tip-loaded elastica: the straight rod bifurcates at load pi^2 / 4 (Euler)."""
+    points = jr.branch_points(OPPOSED, "field.load", 0.0, 4.0, n=n)
+    assert len(points) == 1
+    p = points[0]
+    assert abs(p.value - math.pi**2 / 4) <= 1e-10
+    assert p.morse_index == (0, 1) and abs(p.unfolding) <= 1e-12
+    assert np.max(np.abs(p.state)) <= 1e-12  # on the straight branch
+    assert not jr.scene_folds(OPPOSED, "field.load", 0.0, 4.0, n=n, throw=False)
+
+
+def test_the_bent_branch_is_followed_and_matches_shooting():
+    """Branch switching at the pitchfork: the bent branch (supercritical: stable, the load
+    rising from pi^2 / 4) against shooting at the same loads, tip position to 1e-11."""
+    p = jr.branch_points(OPPOSED, "field.load", 0.0, 4.0, n=24)[0]
+    bent = jr.bifurcated_branch(OPPOSED, p, 8.0, n=24)
+    assert bent.complete and bent.value[0] >= p.value and bent.value[-1] >= 8.0 - 1e-9
+    assert np.all(bent.stable[1:])
+    for i in (len(bent.value) // 3, len(bent.value) - 1):
+        lam = float(bent.value[i])
+        X = bent.tip_position[i]
+        refs = shooting_equilibria(lam, math.pi, k_max=8.0)
+        ref = min(refs, key=lambda r: abs(r[1] - X[0]) + abs(r[2] - X[2]))
+        assert abs(X[0] - ref[1]) <= 1e-11 and abs(X[2] - ref[2]) <= 1e-11
+    other = jr.bifurcated_branch(OPPOSED, p, 8.0, n=24, side=-1)
+    assert np.allclose(other.tip_position[-1][[0, 2]] * [-1, 1],
+                       bent.tip_position[-1][[0, 2]], atol=1e-6) or \
+        other.tip_position[-1][0] * bent.tip_position[-1][0] < 0
+
+
+def test_greenhill_as_a_branch_point():
+    """The upright rod under its own weight (no field): the branch point in G is
+    Greenhill's G_c = (9/4) j^2, j the first zero of J_{-1/3} (a closed form)."""
+    j = brentq(lambda x: jv(-1.0 / 3.0, x), 1.0, 2.5, xtol=1e-15)
+    scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(0.0)})
+    points = jr.branch_points(scene, "gravity.G", 0.0, 10.0, n=24)
+    assert len(points) == 1 and abs(points[0].value - 2.25 * j**2) <= 1e-9
+
+
+def test_a_fold_is_not_a_branch_point():
+    """The field rotating round the cantilever: the stability changes there are folds."""
+    scene = jr.Scene({"bending": jr.Bending(), "field": Zeeman(5.0, math.pi / 2)})
+    assert not jr.branch_points(scene, "field.angle", math.pi / 2, math.radians(359.0), n=16)
+
+
+def test_cli_branch_prints_the_branch_points():
+    proc = subprocess.run(
+        [sys.executable, "-m", "jaxrod.cli", "branch", "hard-magnetic-cantilever", "--vary",
+         "field.0.B", "--from", "0", "--to", "2e-3", "--set", "field.0.angle_deg=180",
+         "--json"], capture_output=True, text=True, timeout=600,
+        env={**os.environ, "JAXROD_NO_CACHE": "1"})
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    (bp,) = out["branch_points"]
+    assert abs(bp["value"] - math.pi**2 / 4 / 4000.0) <= 1e-13  # lambda = 4000 B
+    assert {"value", "tip_angle_deg"} <= set(bp) and out["folds"] == []
