@@ -257,3 +257,70 @@ def test_the_shipped_permanent_magnet_rig_in_si_gives_the_presets_folds():
         assert abs(f.value / factor - p.alpha_deg) <= 1e-10
         assert abs(f.tip_angle_deg - p.tip_deg) <= 1e-9
     assert load("hard-magnetic-cantilever").scene.terms["field0"].load == pytest.approx(5.0)
+
+
+RAIL = """
+units = "nondimensional"
+[magnetisation]
+kind = "soft"
+[gravity]
+G = 2.2
+[[field]]
+kind = "dipole"
+M = 0.25
+position = [0.0, 1.2]        # on a straight rail at height 1.2 rod lengths
+moment_direction = [0.0, 1.0]
+"""
+
+
+def _rail_position_of_k(k, guess, G=2.2, M=0.25, z=1.2):
+    """Shooting in the natural parameter k = theta'(0): the rail position x and the tip X
+    with theta'' = -G (1 - s) sin theta + P1 cos theta - P2 sin theta, P = M grad Phi(X)
+    (the Euler-Lagrange equation of the endpoint potential), theta'(1) = 0, X = int d3."""
+    def grad_phi(X1, X3, x):
+        r = np.array([X1 - x, X3 - z])
+        m = np.array([0.0, 1.0])
+        rn = math.hypot(*r)
+        return m / rn**3 - 3.0 * np.dot(m, r) * r / rn**5
+
+    def F(v):
+        x, X1, X3 = v
+        P = M * grad_phi(X1, X3, x)
+
+        def rhs(s, y):
+            return [y[1], -G * (1 - s) * math.sin(y[0]) + P[0] * math.cos(y[0])
+                    - P[1] * math.sin(y[0]), math.sin(y[0]), math.cos(y[0])]
+        y = solve_ivp(rhs, (0.0, 1.0), [0.0, k, 0.0, 0.0], method="DOP853", rtol=1e-13,
+                      atol=1e-14).y[:, -1]
+        return [y[1], y[2] - X1, y[3] - X3]
+
+    return fsolve(F, guess, xtol=1e-13)
+
+
+def test_a_magnet_on_a_straight_rail_folds_against_shooting(tmp_path):
+    """The paper's soft wire and a magnet moved along a straight rail above it (moment up):
+    capture and release are folds in the rail position, found by the engine along
+    field.0.position.0 and, independently, as the extrema of the rail position along the
+    branch parametrised by theta'(0) (shooting); agreement to 1e-9 rod lengths."""
+    from scipy.optimize import minimize_scalar
+
+    path = tmp_path / "rail.toml"
+    path.write_text(RAIL)
+    file = load(path)
+    key, factor = file.input_of("field.0.position.0")
+    folds = jr.scene_folds(file.scene, key, 0.0, 1.5, n=24)
+    assert len(folds) == 2
+    release, capture = sorted(f.value / factor for f in folds)[::-1]
+    guess = {"x": np.array([1.0, 0.2, 0.97])}
+
+    def rail(k, sign):
+        v = _rail_position_of_k(k, guess["x"])
+        guess["x"] = v
+        return sign * v[0]
+
+    lo = minimize_scalar(lambda k: rail(k, 1.0), bounds=(0.45, 0.75), method="bounded",
+                         options={"xatol": 1e-10})
+    hi = minimize_scalar(lambda k: rail(k, -1.0), bounds=(1.2, 1.45), method="bounded",
+                         options={"xatol": 1e-10})
+    assert abs(capture - lo.fun) <= 1e-9
+    assert abs(release + hi.fun) <= 1e-9
