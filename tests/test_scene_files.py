@@ -43,25 +43,28 @@ def cantilever(tmp_path_factory):
 # -- the independent reference: shooting on theta'' + G (1 - s) sin theta
 #    + lam sin(a - theta) = 0, theta(0) = 0, theta'(1) = 0 -----------------------------------
 
-def _shoot(k, lam, a, G):
+def _shoot(k, lam, a, G, phi=None):
     def f(s, y):
-        return [y[1], -lam * math.sin(a - y[0]) - G * (1 - s) * math.sin(y[0]),
+        p = 0.0 if phi is None else phi(s)
+        return [y[1], -lam * math.sin(a - y[0] - p) - G * (1 - s) * math.sin(y[0]),
                 math.sin(y[0]), math.cos(y[0])]
     sol = solve_ivp(f, (0.0, 1.0), [0.0, k, 0.0, 0.0], method="DOP853", rtol=1e-13,
                     atol=1e-14)
     return sol.y[:, -1]
 
 
-def shooting_equilibria(lam, a, G=0.0, k_max=12.0, count=241):
+def shooting_equilibria(lam, a, G=0.0, k_max=12.0, count=241, phi=None):
     """Every equilibrium with |theta'(0)| <= k_max: (tip tangent deg, X1, X3) per root of
-    theta'(1; k) = 0, bracketed on a grid of k and refined by brentq."""
+    theta'(1; k) = 0, bracketed on a grid of k and refined by brentq. ``phi``: the
+    magnetisation's angle to the tangent along s (default 0)."""
     ks = np.linspace(-k_max, k_max, count)
-    end = [_shoot(k, lam, a, G)[1] for k in ks]
+    end = [_shoot(k, lam, a, G, phi)[1] for k in ks]
     out = []
     for k0, k1, f0, f1 in zip(ks[:-1], ks[1:], end[:-1], end[1:]):
         if f0 * f1 < 0:
-            k = brentq(lambda k: _shoot(k, lam, a, G)[1], k0, k1, xtol=1e-15, rtol=1e-15)
-            y = _shoot(k, lam, a, G)
+            k = brentq(lambda k: _shoot(k, lam, a, G, phi)[1], k0, k1, xtol=1e-15,
+                       rtol=1e-15)
+            y = _shoot(k, lam, a, G, phi)
             out.append((math.degrees(y[0]), y[2], y[3]))
     return out
 
@@ -86,6 +89,23 @@ def test_hard_magnetic_cantilever_against_shooting(cantilever, angle_deg, load, 
     X = eq.tip_position * file.length
     assert abs(X[0] / file.length - ref[1]) <= 1e-11 and abs(X[2] / file.length - ref[2]) <= 1e-11
     assert abs(eq.tip_angle_deg - math.degrees(math.atan2(ref[1], ref[2]))) <= 1e-9
+
+
+@pytest.mark.parametrize("setting, phi", [
+    ("magnetisation.angle_deg=20", lambda s: math.radians(20.0)),
+    ("magnetisation.profile_deg=[10.0, -30.0, 45.0]",
+     lambda s: math.radians(10.0 - 30.0 * s + 45.0 * s * s)),
+])
+def test_programmed_magnetisation_against_shooting(cantilever, setting, phi):
+    """A remanence at an angle phi(s) to the tangent (constant, or a profile in s): the
+    density -load cos(theta + phi(s) - a); theta'' + load sin(a - theta - phi(s)) = 0 by
+    shooting; tip angle to 1e-9 degrees."""
+    file = load_file(cantilever, [setting, "field.0.B=2.5e-3"])
+    eq = jr.equilibrium(file.scene, n=32)
+    assert eq.converged and eq.stable
+    ref = min(shooting_equilibria(10.0, math.radians(90.0), phi=phi),
+              key=lambda r: abs(r[0] - eq.tip_tangent_deg))
+    assert abs(eq.tip_tangent_deg - ref[0]) <= 1e-9
 
 
 def load_file(path, settings):

@@ -6,7 +6,9 @@ A file in SI units (the default) or, with ``units = "nondimensional"``, in the g
     [rod]            length (m), radius (m), youngs_modulus (Pa), support ("clamped" at the
                      origin pointing along +z, or "pinned"), density (kg/m^3, with gravity)
     [magnetisation]  kind = "hard" (remanent, fixed in the material; remanence in A/m along
-                     the tangent) or "soft" (the paper's wire, saturated along the tangent
+                     the tangent, or at angle_deg to it, or at a profile along s,
+                     profile_deg = [c0, c1, ...] degrees, c0 + c1 s + ...; uniform fields,
+                     planar rods) or "soft" (the paper's wire, saturated along the tangent
                      with polarity +d3; saturation in A/m)
     [[field]]        kind = "uniform": B (T) or load (A_c M_r B L^2 / (E I)), angle_deg
                      (from +z toward +x); a soft wire in a uniform field: A (the paper's
@@ -37,14 +39,22 @@ import numpy as np
 
 from jaxrod.params import MU0, ParameterError
 from jaxrod.scenes.scene import Scene
-from jaxrod.scenes.terms import Anisotropy, Bending, Dipole, Gravity, PointDipole, Zeeman
+from jaxrod.scenes.terms import (
+    Anisotropy,
+    Bending,
+    Dipole,
+    Gravity,
+    PointDipole,
+    ProgrammedMagnetisation,
+    Zeeman,
+)
 
 #: Allowed keys of each table, SI and nondimensional.
 TABLES = {
     "rod": {"si": ("length", "radius", "youngs_modulus", "support", "density"),
             "nondimensional": ("support",)},
-    "magnetisation": {"si": ("kind", "remanence", "saturation"),
-                      "nondimensional": ("kind",)},
+    "magnetisation": {"si": ("kind", "remanence", "saturation", "angle_deg", "profile_deg"),
+                      "nondimensional": ("kind", "angle_deg", "profile_deg")},
     "gravity": {"si": ("g",), "nondimensional": ("G",)},
 }
 FIELD_KEYS = {
@@ -257,6 +267,7 @@ def scene_from(data: dict) -> FileScene:
     if si and fields:
         m_key = "remanence" if kind == "hard" else "saturation"
         magnetisation = _number(mag, m_key, "magnetisation.")
+    profile = _profile(mag, kind, geometry)
     for i, field in enumerate(fields):
         where = f"field.{i}."
         fkind = field["kind"]
@@ -271,15 +282,22 @@ def scene_from(data: dict) -> FileScene:
                 terms[name] = Anisotropy(_number(field, "A", where), _direction(angle))
                 inputs[f"{where}A"] = (f"{name}.A", 1.0)
                 continue
-            if si:
-                per_b = area * magnetisation * L**2 / bending
-                terms[name] = Zeeman(per_b * _number(field, "B", where), angle)
-                inputs[f"{where}B"] = (f"{name}.load", per_b)
+            per_b = area * magnetisation * L**2 / bending if si else 1.0
+            load = per_b * _number(field, "B" if si else "load", where)
+            inputs[f"{where}{'B' if si else 'load'}"] = (f"{name}.load", per_b)
+            if profile is None:
+                terms[name] = Zeeman(load, angle)
             else:
-                terms[name] = Zeeman(_number(field, "load", where), angle)
-                inputs[f"{where}load"] = (f"{name}.load", 1.0)
+                terms[name] = ProgrammedMagnetisation(load, angle, profile)
+                if len(profile) == 1 and len(fields) == 1:
+                    inputs["magnetisation.angle_deg"] = (f"{name}.profile.0", math.pi / 180.0)
             inputs[f"{where}angle_deg"] = (f"{name}.angle", math.pi / 180.0)
             continue
+        if profile is not None:
+            _fail("magnetisation.angle_deg" if "angle_deg" in mag else
+                  "magnetisation.profile_deg", "a magnetisation at an angle to the tangent "
+                  "acts in uniform fields only (in a magnet's field it is a distributed term "
+                  "of the positions, not written yet)")
         # a dipole
         if si:
             if "moment" in field:
@@ -331,6 +349,32 @@ def scene_from(data: dict) -> FileScene:
         inputs[f"{where}position.1"] = (f"{name}.position.2", 1.0 / L)
     scene = Scene(terms, geometry=geometry, support=support)
     return FileScene(scene, inputs, L, data)
+
+
+def _profile(mag: dict, kind, geometry: str):
+    """The magnetisation's angle to the tangent, polynomial coefficients in s (radians), or
+    None along the tangent: ``angle_deg`` (constant) or ``profile_deg`` ([c0, c1, ...])."""
+    if "angle_deg" in mag and "profile_deg" in mag:
+        _fail("magnetisation.profile_deg", "give angle_deg (a constant angle) or profile_deg "
+                                           "(coefficients in s), not both")
+    if "angle_deg" not in mag and "profile_deg" not in mag:
+        return None
+    key = "angle_deg" if "angle_deg" in mag else "profile_deg"
+    if kind != "hard":
+        _fail(f"magnetisation.{key}", "only a hard magnetisation is programmed at an angle "
+                                      "to the tangent")
+    if geometry != "planar":
+        _fail(f"magnetisation.{key}", "a programmed magnetisation needs geometry = "
+                                      "\"planar\" (the 3D rod's chart carries no d1)")
+    if key == "angle_deg":
+        return np.radians([_number(mag, "angle_deg", "magnetisation.")])
+    c = mag["profile_deg"]
+    if not isinstance(c, list) or not c or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in c):
+        _fail("magnetisation.profile_deg", f"must be a list of finite numbers (degrees: "
+                                           f"c0 + c1 s + c2 s^2 ...), got {c!r}")
+    return np.radians(np.asarray(c, float))
 
 
 def _direction(angle: float):
