@@ -344,3 +344,37 @@ def test_a_magnet_on_a_straight_rail_folds_against_shooting(tmp_path):
                          options={"xatol": 1e-10})
     assert abs(capture - lo.fun) <= 1e-9
     assert abs(release + hi.fun) <= 1e-9
+
+
+def test_cli_foldcurve_on_a_scene_file_passes_the_cusp_of_the_pitchfork():
+    """The snap's fold in the field angle, followed in B down from 1.25 mT: its two branches
+    meet at a cusp where the field opposes the magnetisation at load pi^2/4 (the imperfect
+    pitchfork's organising centre), here B = pi^2 / (4 * 4000) T."""
+    proc = _cli("foldcurve", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg",
+                "--from", "90", "--to", "359", "--along", "field.0.B", "--along-to", "3e-4",
+                "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    (cusp,) = out["cusps"]
+    assert abs(cusp["along"] - math.pi**2 / 4 / LAMBDA_PER_TESLA) <= 2e-7  # the curve's step
+    assert abs(cusp["value"] - 180.0) <= 1e-3 and out["converged"]
+
+
+def test_cli_map_on_a_scene_file(tmp_path):
+    """The rail's folds on a 2 x 2 grid of the magnet's strength and height: map.json and
+    map.png; a point's fold count and first fold as jr.scene_folds gives them there."""
+    path = tmp_path / "rail.toml"
+    path.write_text(RAIL)
+    out_dir = tmp_path / "map"
+    proc = _cli("map", str(path), "--vary", "field.0.position.0", "--from", "0", "--to", "1.5",
+                "--x", "field.0.M:0.15:0.25:2", "--y", "field.0.position.1:1.2:1.35:2",
+                "--out", str(out_dir), "--json")
+    assert proc.returncode == 0, proc.stderr
+    assert (out_dir / "map.png").exists()
+    data = json.loads((out_dir / "map.json").read_text())
+    file = load(path, ["field.0.M=0.25", "field.0.position.1=1.2"])
+    key, factor = file.input_of("field.0.position.0")
+    folds = jr.scene_folds(file.scene, key, 0.0, 1.5, n=16)
+    assert data["count"][0][1] == len(folds) == 2
+    assert abs(data["first"][0][1] - folds[0].value / factor) <= 1e-9
+    assert data["count"][1][0] == 0  # higher and weaker: no loop

@@ -14,6 +14,12 @@ from jaxrod.cli._inputs import (
     add_magnet_inputs,
 )
 from jaxrod.cli._output import _fmt_cusp, _header, _output_dir, _write_fold_curves
+from jaxrod.cli.scene_file import (
+    add_scene_file_inputs,
+    foldcurve_on_file,
+    map_on_file,
+    uses_scene_file,
+)
 from jaxrod.params import (
     GROUP_NAMES,
     PHYSICAL_NAMES,
@@ -49,6 +55,11 @@ def cmd_cusp(args) -> int:
 def cmd_foldcurve(args) -> int:
     from jaxrod.bistability.fold_curves import fold_curves
 
+    if uses_scene_file(args):
+        return foldcurve_on_file(args)
+    if args.vary is None or args.to is None:
+        raise ParameterError("vary: give --vary NAME --to VALUE (a group, or a physical "
+                             "input with --preset)")
     point, inputs = _design_point_from_args(args)
     point.index(args.vary)
     out_dir = _output_dir(args.out) if args.out else None
@@ -79,6 +90,8 @@ def cmd_foldcurve(args) -> int:
 
 
 def cmd_map(args) -> int:
+    if uses_scene_file(args):
+        return map_on_file(args)
     if args.num_processes > 1:
         import jax
 
@@ -150,19 +163,30 @@ def add_cusp(sub) -> None:
 
 
 def add_foldcurve(sub) -> None:
-    fc = sub.add_parser("foldcurve", help="both fold curves in a second input, and the cusp")
+    fc = sub.add_parser("foldcurve", help="both fold curves in a second input, and the "
+                        "cusp; or a fold curve of a scene file")
+    add_scene_file_inputs(fc, vary=True, to=False)
     add_magnet_inputs(fc)
-    fc.add_argument("--vary", required=True, choices=GROUP_NAMES + PHYSICAL_NAMES,
-                    help="the input that varies (a group, or a physical input with --preset)")
-    fc.add_argument("--to", type=_float("to"), required=True,
-                    help="the value of the varied input where the curves end")
+    fc.add_argument("--vary", help="the input that varies (a group, or a physical input "
+                    f"with --preset: {', '.join(GROUP_NAMES + PHYSICAL_NAMES)}); with a "
+                    "scene file, the input whose fold is followed")
+    fc.add_argument("--to", type=_float("to"), default=None,
+                    help="the value of the varied input where the curves end (with a scene "
+                    "file: the end of --vary's range)")
+    fc.add_argument("--along", metavar="KEY", help="scene file: the second input")
+    fc.add_argument("--along-to", type=_float("along-to"), default=None,
+                    help="scene file: where the curve ends in --along")
+    fc.add_argument("--which", type=int, default=0, help="scene file: which fold along "
+                    "--vary (0: the first met)")
     fc.add_argument("--out", default=None, help="directory for foldcurve.csv/.json/.png")
     fc.set_defaults(func=cmd_foldcurve)
 
 
 def add_map(sub) -> None:
     mp = sub.add_parser("map", help="capture/release angles and hysteresis width on a grid "
-                        "of two inputs (chunked Zarr store, resumable)")
+                        "of two inputs (chunked Zarr store, resumable); or the folds of a "
+                        "scene file on a grid")
+    add_scene_file_inputs(mp, vary=True)
     add_magnet_inputs(mp, BATCH_N)
     mp.add_argument("--x", required=True, help="name:start:stop:count of the first input")
     mp.add_argument("--y", required=True, help="name:start:stop:count of the second input")

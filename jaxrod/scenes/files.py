@@ -124,13 +124,13 @@ class FileScene:
     length: float
     data: dict
 
-    def input_of(self, key: str) -> tuple[str, float]:
-        """(scene key, factor) of the file key ``key``; ParameterError naming the nearest
-        valid key when it is not a scalar input."""
+    def input_of(self, key: str, what: str = "vary") -> tuple[str, float]:
+        """(scene key, factor) of the file key ``key``; ParameterError (naming the option
+        ``what`` and the nearest valid key) when it is not a scalar input."""
         if key not in self.inputs:
             near = difflib.get_close_matches(key, list(self.inputs), n=1)
             hint = f" (did you mean {near[0]!r}?)" if near else ""
-            raise ParameterError(f"vary: {key!r} is not a scalar input of this scene file"
+            raise ParameterError(f"{what}: {key!r} is not a scalar input of this scene file"
                                  f"{hint}; its inputs: {', '.join(self.inputs)}")
         return self.inputs[key]
 
