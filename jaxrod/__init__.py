@@ -77,6 +77,8 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "branch_points": ("jaxrod.equilibria.branch_points", "branch_points"),
         "bifurcated_branch": ("jaxrod.equilibria.branch_points", "bifurcated_branch"),
         "fold_curve": ("jaxrod.bistability.fold_curve", "fold_curve"),
+        "fit_folds": ("jaxrod.inverse.scene_fit", "fit_folds"),
+        "design_folds": ("jaxrod.inverse.scene_fit", "design_folds"),
         "fold_map": ("jaxrod.bistability.fold_map", "fold_map"),
         "Status": ("jaxrod.status", "Status"),
         "SolverError": ("jaxrod.status", "SolverError"),

@@ -14,12 +14,8 @@ from jaxrod.cli._inputs import (
     add_magnet_inputs,
 )
 from jaxrod.cli._output import _fmt_cusp, _header, _output_dir, _write_fold_curves
-from jaxrod.cli.scene_file import (
-    add_scene_file_inputs,
-    foldcurve_on_file,
-    map_on_file,
-    uses_scene_file,
-)
+from jaxrod.cli.scene_curves import foldcurve_on_file, map_on_file
+from jaxrod.cli.scene_file import add_scene_file_inputs, uses_scene_file
 from jaxrod.params import (
     GROUP_NAMES,
     PHYSICAL_NAMES,
@@ -55,7 +51,7 @@ def cmd_cusp(args) -> int:
 def cmd_foldcurve(args) -> int:
     from jaxrod.bistability.fold_curves import fold_curves
 
-    if uses_scene_file(args):
+    if uses_scene_file(args, vary_is_file_key=False):
         return foldcurve_on_file(args)
     if args.vary is None or args.to is None:
         raise ParameterError("vary: give --vary NAME --to VALUE (a group, or a physical "

@@ -1,4 +1,5 @@
-"""``jaxrod fit | design``: calibration on measured switching angles, inverse design."""
+"""``jaxrod fit | design``: calibration on measured switching angles, inverse design (and
+on any rig's scene file: ``scene_inverse``)."""
 
 from __future__ import annotations
 
@@ -21,13 +22,15 @@ from jaxrod.cli._inputs import (
     add_physical_inputs,
 )
 from jaxrod.cli._output import _not_converged, _output_dir
-from jaxrod.params import (
-    GROUP_NAMES,
-    PHYSICAL_NAMES,
-    UNITS,
-    Magnet,
-    ParameterError,
+from jaxrod.cli.scene_file import uses_scene_file
+from jaxrod.cli.scene_inverse import (
+    _legacy_keys,
+    add_design_scene_options,
+    add_fit_scene_options,
+    design_on_file,
+    fit_on_file,
 )
+from jaxrod.params import GROUP_NAMES, PHYSICAL_NAMES, UNITS, Magnet, ParameterError
 
 
 def _measured_from_args(args) -> list:
@@ -73,6 +76,8 @@ def cmd_fit(args) -> int:
     from jaxrod.inverse.calibration import ANGLE_NAMES
     from jaxrod.inverse.fit import FREE_NAMES, OFFSET, Prior, fit, profile
 
+    if uses_scene_file(args):
+        return fit_on_file(args)
     measured = _measured_from_args(args)
     args.sigma_given = args.sigma_deg is not None
     args.sigma_deg = 1.0 if args.sigma_deg is None else args.sigma_deg
@@ -105,7 +110,7 @@ def cmd_fit(args) -> int:
     inputs["sigma-deg"] = _entry(args.sigma_deg, "deg", "given" if args.sigma_given
                                  else "default")
     cal = fit(measured, free, point, priors, args.sigma_deg, bounds)
-    out = cal.as_dict() | {"inputs": inputs} | _legacy_fit_keys(cal)
+    out = cal.as_dict() | {"inputs": inputs} | _legacy_keys(cal)
     profiles = []
     if args.profile:
         profiles = [profile(measured, name, free, point, priors, args.sigma_deg, fitted=cal)
@@ -127,15 +132,6 @@ def cmd_fit(args) -> int:
     if not cal.converged:
         _not_converged("fit", cal.reason)
     return 0 if cal.converged else 1
-
-
-def _legacy_fit_keys(cal) -> dict:
-    """The keys of the one-parameter fit's JSON (E_Pa, offset_deg, ...), for scripts."""
-    from jaxrod.inverse.youngs import fit_result
-
-    flat = fit_result(cal, "offset" in cal.free)
-    return {k: flat[k] for k in ("E_Pa", "E_std_Pa", "offset_deg", "offset_std_deg",
-                                 "warning")}
 
 
 def _print_calibration(cal, angle_names) -> None:
@@ -184,6 +180,10 @@ PAPER_GROUPS = {"G": 2.2, "M": 0.0236, "D": 11.25 / 9.2}
 def cmd_design(args) -> int:
     from jaxrod.inverse.design import design
 
+    if uses_scene_file(args, vary_is_file_key=False):
+        return design_on_file(args)
+    if args.vary is None or args.capture is None or args.release is None:
+        raise ParameterError("vary: give --capture, --release and --vary NAMES")
     vary = _names(args.vary, "vary")
     groups = any(getattr(args, k) is not None for k in ("G", "M", "D", "magnet_radius")) or (
         all(k in GROUP_NAMES for k in vary)
@@ -252,6 +252,7 @@ def add_fit(sub) -> None:
                         "clockwise sweep (alpha increasing), then capture and release of the "
                         "counter-clockwise sweep. The wire and magnet are the paper's unless "
                         "given (--E, --length, --track-radius, ...).")
+    add_fit_scene_options(ft)
     ft.add_argument("--preset", choices=["permanent-magnet"], default=None)
     ft.add_argument("--angles", type=_float("angles"), nargs="+",
                     help="CW_CAPTURE CW_RELEASE CCW_CAPTURE CCW_RELEASE (deg)")
@@ -284,11 +285,12 @@ def add_design(sub) -> None:
     de = sub.add_parser("design", help="inputs whose folds capture and release at target "
                         "angles (inverse design)")
     add_magnet_inputs(de, BATCH_N)
-    de.add_argument("--capture", type=_float("capture", "angle"), required=True,
+    add_design_scene_options(de)
+    de.add_argument("--capture", type=_float("capture", "angle"),
                     help="target capture angle (the lower fold), deg")
-    de.add_argument("--release", type=_float("release", "angle"), required=True,
+    de.add_argument("--release", type=_float("release", "angle"),
                     help="target release angle (the upper fold), deg")
-    de.add_argument("--vary", required=True, help="comma-separated inputs to solve for, "
+    de.add_argument("--vary", help="comma-separated inputs to solve for, "
                     "e.g. track-radius,magnet-diameter or D,M")
     de.add_argument("--bounds", action="append", default=[], metavar="NAME=LO:HI",
                     help="bounds of a varied input (default: a factor 3 either side)")

@@ -1,0 +1,105 @@
+"""``jaxrod foldcurve | map RIG``: fold curves and maps of any rig given by a scene file
+(``jaxrod.scenes.files``)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from jaxrod.cli.scene_file import _load, _range
+from jaxrod.params import ParameterError
+
+
+def _axis(text: str, what: str, file):
+    key, *rest = text.split(":")
+    if len(rest) != 3:
+        raise ParameterError(f"{what}: write KEY:START:STOP:COUNT, got {text!r}")
+    try:
+        a, b, count = float(rest[0]), float(rest[1]), int(rest[2])
+    except ValueError:
+        raise ParameterError(f"{what}: write KEY:START:STOP:COUNT, got {text!r}") from None
+    scene_key, factor = file.input_of(key, what)
+    return key, scene_key, factor, np.linspace(a, b, count)
+
+
+def foldcurve_on_file(args) -> int:
+    """``jaxrod foldcurve RIG --vary KEY --from A --to B --along KEY2 --along-to C``: the
+    curve of the first fold met along KEY (``--which`` picks another) as KEY2 goes from the
+    file's value to C, with the cusps it passes."""
+    import jaxrod as jr
+
+    file = _load(args)
+    key, start, stop, factor = _range(args, file)
+    if args.along is None or args.along_to is None:
+        raise ParameterError("along: give --along KEY --along-to VALUE with a scene file")
+    along, a_factor = file.input_of(args.along, "along")
+    a0 = float(np.asarray(file.scene.value(along)))
+    curve = jr.fold_curve(file.scene, key, (start, stop), along, (a0, a_factor * args.along_to),
+                          which=args.which, n=args.n)
+    cusps = [{"along": float(0.5 * (curve.along_values[i] + curve.along_values[i + 1]))
+              / a_factor, "value": float(curve.values[i]) / factor}
+             for i in curve.cusp_indices]
+    out = {"vary": args.vary, "along": args.along,
+           "along_values": (curve.along_values / a_factor).tolist(),
+           "values": (curve.values / factor).tolist(),
+           "tip_angle_deg": curve.tip_angle_deg.tolist(), "cusps": cusps,
+           "status": [s.name.lower() for s in curve.status],
+           "converged": all(s.ok for s in curve.status)}
+    if args.out:
+        from jaxrod.cli._output import _output_dir
+
+        (_output_dir(args.out) / "foldcurve.json").write_text(json.dumps(out, indent=1))
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"{args.rig}: the fold in {args.vary} followed in {args.along} over "
+              f"{len(curve.values)} points ({', '.join(str(s) for s in curve.status)})")
+        for c in cusps:
+            print(f"  cusp near {args.along} = {c['along']:.8g}, {args.vary} = "
+                  f"{c['value']:.8g}")
+    return 0 if out["converged"] else 1
+
+
+def map_on_file(args) -> int:
+    """``jaxrod map RIG --vary KEY --from A --to B --x KEY:A:B:N --y KEY:A:B:N --out DIR``:
+    the folds along KEY at every grid point (map.json, map.png)."""
+    import jaxrod as jr
+    from jaxrod.cli._output import _output_dir
+    from jaxrod.progress import Interrupted
+
+    file = _load(args)
+    key, start, stop, factor = _range(args, file)
+    xk, xs_key, xf, xs = _axis(args.x, "x", file)
+    yk, ys_key, yf, ys = _axis(args.y, "y", file)
+    out_dir = _output_dir(args.out)
+    try:
+        m = jr.fold_map(file.scene, key, (start, stop), (xs_key, xf * xs), (ys_key, yf * ys),
+                        n=args.n, progress=not args.quiet)
+        interrupted = False
+    except Interrupted as err:
+        m, interrupted = err.partial, True
+    out = {"vary": args.vary, "x": xk, "x_values": xs.tolist(), "y": yk,
+           "y_values": ys.tolist(), "count": m.count.tolist(),
+           "first": np.where(np.isnan(m.first), None, m.first / factor).tolist(),
+           "second": np.where(np.isnan(m.second), None, m.second / factor).tolist(),
+           "status": m.status.tolist(), "bistable_points": int(np.sum(m.bistable)),
+           "failed_points": int(np.sum(m.status != 0)), "interrupted": interrupted}
+    (out_dir / "map.json").write_text(json.dumps(out))
+    if not args.no_plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(6, 4.5))
+        m.plot(ax)
+        ax.set_xlabel(xk)
+        ax.set_ylabel(yk)
+        fig.savefig(out_dir / "map.png", dpi=120)
+    summary = {k: out[k] for k in ("vary", "x", "y", "bistable_points", "failed_points",
+                                   "interrupted")}
+    print(json.dumps(summary) if args.json else
+          f"{args.rig}: {m.count.size} points, {summary['bistable_points']} with two folds "
+          f"in {args.vary}, {summary['failed_points']} failed; wrote {out_dir / 'map.json'}")
+    return 130 if interrupted else (0 if out["failed_points"] == 0 else 1)

@@ -1,0 +1,114 @@
+"""``jaxrod fit | design RIG``: the inputs of any rig given by a scene file whose folds sit
+at measured (fit) or target (design) values (``jaxrod.inverse.scene_fit``)."""
+
+from __future__ import annotations
+
+import json
+
+from jaxrod.cli._inputs import _degree, _float
+from jaxrod.cli.scene_file import _load, _range, add_scene_file_inputs
+from jaxrod.params import ParameterError
+
+
+def add_fit_scene_options(ft) -> None:
+    """``jaxrod fit RIG``'s options beside the paper's (its --free and --bounds serve both)."""
+    add_scene_file_inputs(ft, vary=True)
+    ft.add_argument("--folds", type=float, nargs="+", help="scene file: the measured folds "
+                    "along --vary, in order (nan: not measured); with --free KEYS")
+    ft.add_argument("--sigma", type=_float("sigma", "sigma-deg"), default=None,
+                    help="scene file: the folds' standard deviation (--vary's units)")
+    ft.add_argument("--n", type=_degree("N-magnet"), default=16,
+                    help="scene file: Chebyshev degree, 4-64 (default 16)")
+
+
+def add_design_scene_options(de) -> None:
+    """``jaxrod design RIG``'s options (its --vary names the paper's inputs: the path of a
+    scene file is --path)."""
+    add_scene_file_inputs(de, vary=True, vary_name="--path")
+    de.add_argument("--targets", type=float, nargs="+", help="scene file: the folds' "
+                    "targets along --path, in order; with --free KEYS")
+    de.add_argument("--free", default=None, help="scene file: comma-separated keys")
+
+
+def _legacy_keys(cal) -> dict:
+    """The keys of the one-parameter fit's JSON (E_Pa, offset_deg, ...), for scripts."""
+    from jaxrod.inverse.youngs import fit_result
+
+    flat = fit_result(cal, "offset" in cal.free)
+    return {k: flat[k] for k in ("E_Pa", "E_std_Pa", "offset_deg", "offset_std_deg",
+                                 "warning")}
+
+
+def _free_and_bounds(args, file):
+    if not args.free:
+        raise ParameterError("free: name the inputs to solve for (--free KEY1,KEY2) with a "
+                             "scene file")
+    keys = [k.strip() for k in args.free.split(",") if k.strip()]
+    free = [file.input_of(k, "free") for k in keys]
+    bounds = {}
+    for item in args.bounds:
+        key, sep, rest = item.partition("=")
+        lo, sep2, hi = rest.partition(":")
+        if not sep or not sep2 or key.strip() not in keys:
+            raise ParameterError(f"bounds: write KEY=LO:HI for a free input, got {item!r}")
+        scene_key, factor = file.input_of(key.strip(), "bounds")
+        try:
+            pair = sorted((factor * float(lo), factor * float(hi)))
+        except ValueError:
+            raise ParameterError(f"bounds: {item!r} is not KEY=LO:HI") from None
+        bounds[scene_key] = tuple(pair)
+    return keys, free, bounds
+
+
+def _report(args, file, keys, free, fit, factor, what: str) -> int:
+    est = {k: fit.estimates[s] / f for k, (s, f) in zip(keys, free)}
+    std = None if fit.std is None else {k: fit.std[s] / abs(f) for k, (s, f) in zip(keys, free)}
+    out = {"vary": args.vary, "free": keys, "estimates": est, "std": std,
+           "folds": [v / factor for v in fit.folds],
+           "residuals": [None if r is None else r / factor for r in fit.residuals],
+           "converged": fit.converged, "iterations": fit.iterations, "reason": fit.reason}
+    if getattr(args, "out", None):
+        from jaxrod.cli._output import _output_dir
+
+        (_output_dir(args.out) / f"{what}.json").write_text(json.dumps(out, indent=1))
+    if args.json:
+        print(json.dumps(out))
+    else:
+        for k in keys:
+            spread = f" +- {std[k]:.6g}" if std else ""
+            print(f"{k} = {est[k]:.10g}{spread}")
+        print(f"folds along {args.vary}: " + ", ".join(f"{v:.10g}" for v in out["folds"]))
+        print(f"converged: {fit.converged}" + (f" ({fit.reason})" if fit.reason else ""))
+    return 0 if fit.converged else 1
+
+
+def fit_on_file(args) -> int:
+    """``jaxrod fit RIG --vary KEY --from A --to B --folds V1 V2 --free K1,K2``."""
+    from jaxrod.inverse.scene_fit import fit_folds
+
+    file = _load(args)
+    key, start, stop, factor = _range(args, file)
+    if not args.folds:
+        raise ParameterError("folds: give the measured fold values (--folds V1 V2 ..., in "
+                             "the order met along --vary; nan for one not measured)")
+    keys, free, bounds = _free_and_bounds(args, file)
+    sigma = 1.0 if args.sigma is None else args.sigma
+    fit = fit_folds(file.scene, key, (start, stop), [factor * v for v in args.folds],
+                    [s for s, _ in free], sigma * abs(factor), bounds, n=args.n)
+    return _report(args, file, keys, free, fit, factor, "fit")
+
+
+def design_on_file(args) -> int:
+    """``jaxrod design RIG --path KEY --from A --to B --targets V1 V2 --free K1,K2``."""
+    from jaxrod.inverse.scene_fit import design_folds
+
+    file = _load(args)
+    args.vary = args.path
+    key, start, stop, factor = _range(args, file)
+    if not args.targets:
+        raise ParameterError("targets: give the folds' target values (--targets V1 V2 ..., "
+                             "in the order met along --path)")
+    keys, free, bounds = _free_and_bounds(args, file)
+    fit = design_folds(file.scene, key, (start, stop), [factor * v for v in args.targets],
+                       [s for s, _ in free], bounds, n=args.n)
+    return _report(args, file, keys, free, fit, factor, "design")

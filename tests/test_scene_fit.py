@@ -1,0 +1,107 @@
+"""Fits and designs on any scene file: the rail rig's inputs from its folds (computed by
+shooting, an independent method), and a design verified by shooting at the answer."""
+
+import json
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize_scalar
+from test_scene_files import RAIL, _cli, _rail_position_of_k
+
+import jaxrod as jr
+from jaxrod.inverse.scene_fit import design_folds, fit_folds
+from jaxrod.params import ParameterError
+from jaxrod.scenes.files import load
+
+
+def rail_folds_by_shooting(M, z):
+    """(release, capture) of the rail rig at (M, z): the extrema of the rail position along
+    the branch parametrised by theta'(0) (shooting)."""
+    guess = {"x": np.array([1.0, 0.2, 0.97])}
+
+    def rail(k, sign):
+        v = _rail_position_of_k(k, guess["x"], M=M, z=z)
+        guess["x"] = v
+        return sign * v[0]
+
+    lo = minimize_scalar(lambda k: rail(k, 1.0), bounds=(0.4, 0.8), method="bounded",
+                         options={"xatol": 1e-10})
+    hi = minimize_scalar(lambda k: rail(k, -1.0), bounds=(1.1, 1.55), method="bounded",
+                         options={"xatol": 1e-10})
+    return -hi.fun, lo.fun
+
+
+@pytest.fixture(scope="module")
+def rail(tmp_path_factory):
+    path = tmp_path_factory.mktemp("rig") / "rail.toml"
+    path.write_text(RAIL)
+    return path
+
+
+def test_fit_recovers_the_magnet_from_folds_computed_by_shooting(rail):
+    """The folds at M = 0.25, height 1.2 by shooting; the fit starts at M = 0.2, height 1.22
+    and recovers both to 1e-8 (two folds, two inputs: an exact fit)."""
+    data = rail_folds_by_shooting(0.25, 1.2)
+    file = load(rail, ["field.0.M=0.2", "field.0.position.1=1.22"])
+    key, _ = file.input_of("field.0.position.0")
+    fit = fit_folds(file.scene, key, (0.0, 1.5), data, ["field0.M", "field0.position.2"],
+                    sigma=1e-3)
+    assert fit.converged, fit.reason
+    assert abs(fit.estimates["field0.M"] - 0.25) <= 1e-8
+    assert abs(fit.estimates["field0.position.2"] - 1.2) <= 1e-8
+    assert all(abs(r) <= 1e-9 for r in fit.residuals)
+    assert all(s > 0 for s in fit.std.values())
+
+
+def test_design_hits_targets_verified_by_shooting(rail):
+    """Release at 1.05 and capture at 0.99 rod lengths along the rail: the design's magnet,
+    checked by shooting at the answer (1e-8) and by a fresh continuation (1e-9)."""
+    file = load(rail, ["field.0.M=0.2", "field.0.position.1=1.22"])
+    key, _ = file.input_of("field.0.position.0")
+    d = design_folds(file.scene, key, (0.0, 1.5), [1.05, 0.99],
+                     ["field0.M", "field0.position.2"], bounds={"field0.M": (0.05, 0.5)})
+    assert d.converged, d.reason
+    M, z = d.estimates["field0.M"], d.estimates["field0.position.2"]
+    release, capture = rail_folds_by_shooting(M, z)
+    assert abs(release - 1.05) <= 1e-8 and abs(capture - 0.99) <= 1e-8
+    again = jr.scene_folds(file.scene.replace("field0.M", M).replace("field0.position.2", z),
+                           key, 0.0, 1.5)
+    assert [abs(f.value - t) <= 1e-9 for f, t in zip(again, (1.05, 0.99))] == [True, True]
+
+
+def test_impossible_targets_are_reported(rail):
+    """The release comes before the capture along the rail: targets in the other order
+    cannot be hit; the design says so."""
+    file = load(rail, ["field.0.M=0.2", "field.0.position.1=1.22"])
+    d = design_folds(file.scene, "field0.position.0", (0.0, 1.5), [0.95, 1.0],
+                     ["field0.M", "field0.position.2"])
+    assert not d.converged and "miss the targets" in d.reason
+
+
+@pytest.mark.parametrize("free, match", [(["field0.position.0"], "met along"),
+                                         (["field0.Q"], "field0.Q"), ([], "at least one")])
+def test_bad_fit_requests(rail, free, match):
+    file = load(rail)
+    with pytest.raises((ParameterError, ValueError), match=match):
+        fit_folds(file.scene, "field0.position.0", (0.0, 1.5), [1.0, 0.98], free)
+
+
+def test_cli_fit_and_design_on_a_scene_file(rail):
+    base = [str(rail), "--set", "field.0.M=0.2", "--set", "field.0.position.1=1.22"]
+    data = rail_folds_by_shooting(0.25, 1.2)
+    proc = _cli("fit", *base, "--vary", "field.0.position.0", "--from", "0", "--to", "1.5",
+                "--folds", *(repr(float(v)) for v in data), "--free",
+                "field.0.M,field.0.position.1", "--sigma", "1e-3", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert abs(out["estimates"]["field.0.M"] - 0.25) <= 1e-8 and out["converged"]
+    proc = _cli("design", *base, "--path", "field.0.position.0", "--from", "0", "--to", "1.5",
+                "--targets", "1.05", "0.99", "--free", "field.0.M,field.0.position.1",
+                "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["converged"] and abs(out["folds"][0] - 1.05) <= 1e-9
+    proc = _cli("fit", *base, "--vary", "field.0.position.0", "--from", "0", "--to", "1.5",
+                "--folds", "1.0", "--free", "rod.length")
+    assert proc.returncode == 2 and "rod.length" in proc.stderr.strip().splitlines()[-1]
+    assert len(proc.stderr.strip().splitlines()) == 1
