@@ -125,24 +125,29 @@ def test_spectral_convergence_of_the_tip_angle(cantilever):
 
 
 def _fold_by_shooting(lam, a0, k0):
-    """A fold in the field angle by shooting: theta'(1; k, a) = 0 and d theta'(1)/dk = 0
-    (central differences in k), solved by fsolve from (k0, a0)."""
-    h = 1e-5
+    """A fold in the field angle by shooting: theta'(1; k, a) = 0 and d theta'(1)/dk = 0,
+    the second from the variational equation u'' = lam cos(a - theta) u, u(0) = 0,
+    u'(0) = 1 integrated with the state (exact to the integrator's tolerance); solved by
+    fsolve from (k0, a0)."""
 
     def F(v):
         k, a = v
-        f = lambda kk: _shoot(kk, lam, a, 0.0)[1]
-        return [f(k), (f(k + h) - f(k - h)) / (2 * h)]
 
-    k, a = fsolve(F, [k0, a0], xtol=1e-13)
+        def rhs(s, y):
+            return [y[1], -lam * math.sin(a - y[0]), y[3], lam * math.cos(a - y[0]) * y[2]]
+        y = solve_ivp(rhs, (0.0, 1.0), [0.0, k, 0.0, 1.0], method="DOP853", rtol=1e-13,
+                      atol=1e-14).y[:, -1]
+        return [y[1], y[3]]
+
+    k, a = fsolve(F, [k0, a0], xtol=1e-14)
+    assert max(abs(r) for r in F([k, a])) < 1e-11
     return math.degrees(a)
 
 
 def test_snap_when_the_field_rotates_round_the_cantilever(cantilever):
     """Load 5, the field rotating from 90 degrees: the bent rod follows it past 180 degrees
-    and snaps at a fold; the fold's angle against shooting to 1e-7 degrees (the reference's
-    central differences in k limit it), and its tip angle the mirror image of the fold met
-    on the way back."""
+    and snaps at a fold; the fold's angle against shooting (with the variational equation)
+    to 1e-9 degrees, and the fold met on the way back its mirror image."""
     file = load_file(cantilever, ["field.0.B=1.25e-3"])
     key, factor = file.input_of("field.0.angle_deg")
     folds = jr.scene_folds(file.scene, key, factor * 90.0, factor * 359.0, n=24)
@@ -150,7 +155,7 @@ def test_snap_when_the_field_rotates_round_the_cantilever(cantilever):
     up, down = (f.value / factor for f in folds)
     assert abs(up + down - 360.0) <= 1e-9  # the mirror symmetry a -> 2 pi - a
     ref = _fold_by_shooting(5.0, math.radians(up + 0.5), 1.5)
-    assert abs(up - ref) <= 1e-7
+    assert abs(up - ref) <= 1e-9
 
 
 def test_pitchfork_of_the_opposed_field_is_a_stability_change_without_fold(cantilever):
