@@ -77,6 +77,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "branch_points": ("jaxrod.equilibria.branch_points", "branch_points"),
         "bifurcated_branch": ("jaxrod.equilibria.branch_points", "bifurcated_branch"),
         "fold_curve": ("jaxrod.bistability.fold_curve", "fold_curve"),
+        "out_of_plane_stability": ("jaxrod.three_d.scene_stability", "out_of_plane_stability"),
         "fit_folds": ("jaxrod.inverse.scene_fit", "fit_folds"),
         "design_folds": ("jaxrod.inverse.scene_fit", "design_folds"),
         "fold_map": ("jaxrod.bistability.fold_map", "fold_map"),

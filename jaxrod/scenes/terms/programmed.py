@@ -26,6 +26,8 @@ class ProgrammedMagnetisation:
     """load, the field's angle a from +z toward +x (radians), and the magnetisation's angle
     to the tangent as polynomial coefficients in s (radians; [phi] for a constant angle)."""
 
+    planar_only = True  # not a field: the 3D rod's chart carries no d1
+
     load: jax.Array | float
     angle: jax.Array | float = 0.0
     profile: jax.Array = dataclasses.field(default_factory=lambda: jnp.zeros(1))
