@@ -78,6 +78,8 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "bifurcated_branch": ("jaxrod.equilibria.branch_points", "bifurcated_branch"),
         "fold_curve": ("jaxrod.bistability.fold_curve", "fold_curve"),
         "out_of_plane_stability": ("jaxrod.three_d.scene_stability", "out_of_plane_stability"),
+        "modes": ("jaxrod.dynamics.modes", "modes"),
+        "in_hertz": ("jaxrod.dynamics.modes", "in_hertz"),
         "fit_folds": ("jaxrod.inverse.scene_fit", "fit_folds"),
         "design_folds": ("jaxrod.inverse.scene_fit", "design_folds"),
         "fold_map": ("jaxrod.bistability.fold_map", "fold_map"),

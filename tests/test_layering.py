@@ -19,7 +19,7 @@ LAYERS = [
     {"equilibria"},
     {"uniform"},
     {"magnet"},
-    {"three_d", "bistability"},
+    {"three_d", "bistability", "dynamics"},
     {"inverse"},
     {"plotting", "reproduce", "analysis"},
     {"cli"},

@@ -1,0 +1,1 @@
+"""The rod in time: vibration modes of equilibria (``modes``)."""

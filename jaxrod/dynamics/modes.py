@@ -1,0 +1,127 @@
+"""Vibration modes of an equilibrium of any scene.
+
+The inextensible Kirchhoff rod's kinetic energy, lateral inertia only (rotary inertia
+neglected: it is (radius / length)^2 smaller), is
+
+    T = 1/2 int_0^1 |dr/dt|^2 ds,   r(s) = int_0^s d3,
+
+in the nondimensional time t / (L^2 sqrt(rho A_c / (E I))). On the discretisation r at the
+quadrature nodes is the cumulative integral of d3(x), so T = 1/2 xdot^T M(x) xdot with the
+mass matrix M = J^T W J (J = dr(s_j)/dx by forward-mode autodiff, W the quadrature weights).
+Small oscillations about an equilibrium x* solve the generalised eigenproblem
+
+    H v = omega^2 M v,   H = the Hessian of the energy at x*,
+
+for the angular frequencies omega (ascending) and the mode shapes v. A negative omega^2 is
+an unstable direction (omega reported as NaN); at a fold the lowest omega^2 goes to zero
+(the snap's soft mode). Frequencies in Hz follow from physical inputs by ``in_hertz``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from functools import lru_cache
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod import spectral
+from jaxrod.equilibria.equilibrium import DEFAULT_N, FIXED, discretise, equilibrium
+from jaxrod.params import ParameterError
+from jaxrod.programs import jit
+from jaxrod.scenes.scene import Scene
+
+
+@lru_cache(maxsize=16)
+def _cumulative(degree: int) -> np.ndarray:
+    return spectral.cumulative_integration_matrix(degree)
+
+
+def positions(scene: Scene, x, disc):
+    """r(s_j) = int_0^{s_j} d3 at the quadrature nodes (rod lengths), (n_q, 3)."""
+    a = jnp.einsum("jrm,m->jr", disc.jet_matrix, x)
+    d3 = jax.vmap(lambda aj: scene._jet(aj)[0])(a)
+    return jnp.asarray(_cumulative(d3.shape[0] - 1)) @ d3
+
+
+def mass_matrix(scene: Scene, x, disc):
+    """M = J^T W J: the kinetic energy 1/2 int |dr/dt|^2 ds as a form in xdot."""
+    J = jax.jacfwd(lambda y: positions(scene, y, disc))(x)  # (n_q, 3, m)
+    return jnp.einsum("j,jkm,jkn->mn", disc.quad_weights, J, J)
+
+
+def _inverse_cholesky(A):
+    L = jnp.linalg.cholesky(A)
+    return jax.scipy.linalg.solve_triangular(L, jnp.eye(L.shape[0]), lower=True)
+
+
+@jit
+def _modes(scene, disc, x):
+    """omega^2 (ascending) and M-orthonormal shapes. M is an integral operator (its small
+    eigenvalues fall as N^-4), so H v = omega^2 M v is solved as the well-conditioned
+    M v = mu (H + sigma M) v, omega^2 = 1 / mu - sigma, with the shift sigma making H + sigma
+    M positive definite (from a first estimate in M's own Cholesky factor)."""
+    H = FIXED.hessian(x, 0.0, (scene, disc))
+    M = mass_matrix(scene, x, disc)
+    Li = _inverse_cholesky(M)
+    rough = jnp.linalg.eigvalsh(Li @ H @ Li.T)[0]
+    sigma = 1.0 + 2.0 * jnp.maximum(-rough, 0.0)
+    Ri = _inverse_cholesky(H + sigma * M)
+    mu, U = jnp.linalg.eigh(Ri @ M @ Ri.T)
+    mu, U = mu[::-1], U[:, ::-1]  # the largest mu: the lowest frequencies
+    V = Ri.T @ U / jnp.sqrt(mu)  # M-orthonormal
+    return 1.0 / mu - sigma, V
+
+
+@dataclasses.dataclass(frozen=True)
+class Modes:
+    """``omega_squared`` (ascending) and ``omega`` (NaN where omega^2 < 0: unstable);
+    ``shapes``: the mode shapes as states (columns, M-orthonormal); ``state``: the
+    equilibrium they are about."""
+
+    omega_squared: np.ndarray
+    shapes: np.ndarray
+    state: np.ndarray
+
+    @property
+    def omega(self) -> np.ndarray:
+        w2 = self.omega_squared
+        return np.where(w2 >= 0.0, np.sqrt(np.abs(w2)), np.nan)
+
+    @property
+    def stable(self) -> bool:
+        return bool(self.omega_squared[0] > 0.0)
+
+    def damping_ratios(self, damping: float) -> np.ndarray:
+        """zeta_k = c / (2 omega_k) for a linear drag c per unit length (its nondimensional
+        form: the drag force c dr/dt acts on every mode alike, as the mass does)."""
+        return damping / (2.0 * self.omega)
+
+    def as_dict(self, count: int | None = None) -> dict:
+        k = slice(0, count)
+        return {"omega": [None if math.isnan(w) else float(w) for w in self.omega[k]],
+                "omega_squared": self.omega_squared[k].tolist(), "stable": self.stable}
+
+
+def modes(scene: Scene, state=None, n: int = DEFAULT_N) -> Modes:
+    """The vibration modes about ``state`` (default: the scene's equilibrium reached by
+    ramping the loads, ``jaxrod.equilibria.equilibrium``); module docstring."""
+    disc = discretise(scene, n)
+    if state is None:
+        state = equilibrium(scene, n).state
+    x = jnp.asarray(state, jnp.float64)
+    if x.shape != (disc.size,):
+        raise ParameterError(f"state has shape {x.shape}; degree {n} needs ({disc.size},)")
+    lam, V = jax.device_get(_modes(scene, disc, x))
+    return Modes(np.asarray(lam), np.asarray(V), np.asarray(x))
+
+
+def in_hertz(omega, length: float, radius: float, youngs_modulus: float,
+             density: float) -> np.ndarray:
+    """Frequencies in Hz of nondimensional angular frequencies: f = omega / (2 pi T),
+    T = L^2 sqrt(rho A_c / (E I)) (a solid round rod of the given radius)."""
+    area, inertia = math.pi * radius**2, math.pi * radius**4 / 4.0
+    T = length**2 * math.sqrt(density * area / (youngs_modulus * inertia))
+    return np.asarray(omega) / (2.0 * math.pi * T)

@@ -1,0 +1,115 @@
+"""Vibration modes of equilibria: the classical cantilever (closed form), the upright rod
+with gravity, a uniform field or an opposed tip load (shooting for the fourth-order
+eigenproblem, an independent method), and the soft mode at a fold."""
+
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+import jaxrod as jr
+from jaxrod.dynamics.modes import in_hertz, modes
+
+
+def cantilever_omegas(count):
+    """omega_k = beta_k^2, 1 + cos(beta) cosh(beta) = 0 (Euler-Bernoulli, clamped-free)."""
+    out, b = [], 1.0
+    while len(out) < count:
+        f = lambda x: 1.0 + math.cos(x) * math.cosh(x)
+        if f(b) * f(b + 0.1) < 0:
+            out.append(brentq(f, b, b + 0.1, xtol=1e-15, rtol=1e-15) ** 2)
+        b += 0.1
+    return out
+
+
+def test_the_clamped_rod_is_the_classical_cantilever():
+    """3.516015, 22.03449, 61.69721 (and the fourth) to 1e-8 relative, spectrally in N."""
+    ref = cantilever_omegas(4)
+    assert [round(w, 5) for w in ref[:3]] == [3.51602, 22.03449, 61.69721]
+    scene = jr.Scene({"bending": jr.Bending()})
+    errors = []
+    for n in (8, 12, 16, 24):
+        omega = modes(scene, n=n).omega
+        errors.append(max(abs(w - r) / r for w, r in zip(omega[:4], ref)))
+    assert errors[0] > 1e-5 and errors[2] < 1e-12 and errors[3] < 1e-12
+    assert errors[1] < errors[0]
+
+
+def _determinant(w2, P):
+    """det of the shooting map for -theta'' - P theta - w2 W = 0, w' = theta, W' = -w,
+    w(0) = theta(0) = 0, theta'(1) = W(1) = 0."""
+    def rhs(s, y):
+        w, th, dth, W = y
+        return [th, dth, -P(s) * th - w2 * W, -w]
+
+    ends = [solve_ivp(rhs, (0.0, 1.0), y0, method="DOP853", rtol=1e-13, atol=1e-15).y[:, -1]
+            for y0 in ([0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0])]
+    return ends[0][2] * ends[1][3] - ends[1][2] * ends[0][3]
+
+
+@pytest.mark.parametrize("G, A, load", [(2.0, 0.0, 0.0), (5.0, 3.0, 0.0), (1.0, 0.0, 1.5)])
+def test_straight_rod_modes_against_shooting(G, A, load):
+    """The upright rod with gravity G, a vertical field (the soft wire's anisotropy A) or an
+    opposed tip load (a hard-magnetic rod, the field against its magnetisation): the lowest
+    three frequencies against the roots of the shooting determinant, to 1e-8 relative."""
+    terms = {"bending": jr.Bending(), "gravity": jr.Gravity(G)}
+    if A:
+        terms["field"] = jr.Anisotropy(A)
+    if load:
+        terms["field"] = jr.Zeeman(load, math.pi)
+    m = modes(jr.Scene(terms), np.zeros(24), n=24)
+    P = lambda s: G * (1.0 - s) - A + load
+    for w2 in m.omega_squared[:3]:
+        lo, hi = w2 * (1 - 1e-4), w2 * (1 + 1e-4)
+        root = brentq(lambda x: _determinant(x, P), lo, hi, xtol=1e-13, rtol=1e-14)
+        assert abs(w2 - root) <= 1e-8 * root
+
+
+def test_the_soft_mode_at_a_fold_goes_as_the_fourth_root_of_the_distance():
+    """On the stable branch next to the paper's upper fold the lowest omega^2 falls as
+    |alpha - alpha*|^(1/2) (so omega as its fourth root), and is zero at the fold."""
+    scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(2.2),
+                      "magnet": jr.Dipole(0.0236, 11.25 / 9.2, 0.0)})
+    fold = max(jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2), key=lambda f: f.value)
+    at = scene.replace("magnet.alpha", fold.value)
+    assert abs(modes(at, fold.state, n=16).omega_squared[0]) <= 1e-8
+    w2 = []
+    deltas = (1e-3, 1e-4, 1e-5)
+    for d in deltas:
+        near = scene.replace("magnet.alpha", fold.value - d)  # the side of the two states
+        # the normal form alpha - alpha* = c (q - q*)^2 predicts both states (phi: int = 1)
+        dq = math.sqrt(d / abs(fold.normal_form_c))
+        states = [jr.equilibrium(near, state=fold.state + s * dq * fold.null_vector, n=16)
+                  for s in (1.0, -1.0)]
+        stable = [e for e in states if e.stable]
+        assert stable
+        w2.append(modes(near, stable[0].state, n=16).omega_squared[0])
+    slopes = np.diff(np.log(w2)) / np.diff(np.log(deltas))
+    assert np.all(np.abs(slopes - 0.5) < 0.02), slopes
+
+
+def test_in_hertz():
+    """f = omega / (2 pi L^2 sqrt(rho A / (E I))): the first mode of a 10 cm steel rod of
+    radius 1 mm against the textbook (beta^2 / 2 pi) sqrt(E I / (rho A L^4))."""
+    L, r, E, rho = 0.1, 1e-3, 200e9, 7850.0
+    f = in_hertz(cantilever_omegas(1)[0], L, r, E, rho)
+    A, I = math.pi * r**2, math.pi * r**4 / 4
+    assert abs(f - 1.8751040687**2 / (2 * math.pi) * math.sqrt(E * I / (rho * A * L**4))) \
+        <= 1e-6 * f
+
+
+def test_cli_modes_json():
+    proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "modes", "--G", "0", "--A", "0",
+                           "--json"], capture_output=True, text=True, timeout=600,
+                          env={**os.environ, "JAXROD_NO_CACHE": "1"})
+    assert proc.returncode == 0, proc.stderr
+    omega = json.loads(proc.stdout)["omega"]
+    assert omega == sorted(omega)
+    for w, r in zip(omega[:3], cantilever_omegas(3)):
+        assert abs(w - r) <= 1e-8 * r
