@@ -79,6 +79,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "fold_curve": ("jaxrod.bistability.fold_curve", "fold_curve"),
         "out_of_plane_stability": ("jaxrod.three_d.scene_stability", "out_of_plane_stability"),
         "modes": ("jaxrod.dynamics.modes", "modes"),
+        "modes_along": ("jaxrod.dynamics.modes", "modes_along"),
         "in_hertz": ("jaxrod.dynamics.modes", "in_hertz"),
         "fit_folds": ("jaxrod.inverse.scene_fit", "fit_folds"),
         "design_folds": ("jaxrod.inverse.scene_fit", "design_folds"),

@@ -113,3 +113,16 @@ def test_cli_modes_json():
     assert omega == sorted(omega)
     for w, r in zip(omega[:3], cantilever_omegas(3)):
         assert abs(w - r) <= 1e-8 * r
+
+
+def test_modes_along_a_branch_change_sign_at_its_folds():
+    """The lowest omega^2 along the paper's branch: positive where the branch is stable,
+    negative where it is not, and its sign changes exactly where folds were detected."""
+    scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(2.2),
+                      "magnet": jr.Dipole(0.0236, 11.25 / 9.2, 0.0)})
+    b = jr.branch(scene, "magnet.alpha", 0.0, math.pi / 2, n=16)
+    w2 = jr.modes_along(scene, b, n=16, count=2)
+    assert w2.shape == (len(b.value), 2) and np.all(w2[:, 0] <= w2[:, 1])
+    assert np.array_equal(w2[:, 0] > 0, b.stable)
+    changes = np.nonzero(np.sign(w2[:-1, 0]) != np.sign(w2[1:, 0]))[0]
+    assert np.array_equal(changes, b.fold_indices)

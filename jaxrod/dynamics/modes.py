@@ -118,6 +118,23 @@ def modes(scene: Scene, state=None, n: int = DEFAULT_N) -> Modes:
     return Modes(np.asarray(lam), np.asarray(V), np.asarray(x))
 
 
+@jit(static_argnames=("vary", "count"))
+def _along(scene, disc, states, values, vary, count):
+    return jax.vmap(lambda x, v: _modes(scene.replace(vary, v), disc, x)[0][:count])(
+        states, values)
+
+
+def modes_along(scene: Scene, branch, n: int = DEFAULT_N, count: int = 3) -> np.ndarray:
+    """omega^2 of the lowest ``count`` modes at every point of a branch of ``scene``
+    (``jr.branch``; its states are of degree ``n``), shape (points, count): the modes as a
+    row of the branch. At a fold the lowest omega^2 crosses zero (the snap's soft mode)."""
+    disc = discretise(scene, n)
+    if branch.theta.shape[1] != disc.size:
+        raise ParameterError(f"the branch's states are not of degree {n}")
+    return np.asarray(_along(scene, disc, jnp.asarray(branch.theta),
+                             jnp.asarray(branch.value), branch.vary, count))
+
+
 def in_hertz(omega, length: float, radius: float, youngs_modulus: float,
              density: float) -> np.ndarray:
     """Frequencies in Hz of nondimensional angular frequencies: f = omega / (2 pi T),
