@@ -383,3 +383,26 @@ def test_cli_map_on_a_scene_file(tmp_path):
     assert data["count"][0][1] == len(folds) == 2
     assert abs(data["first"][0][1] - folds[0].value / factor) <= 1e-9
     assert data["count"][1][0] == 0  # higher and weaker: no loop
+
+
+def test_a_rail_at_any_angle_is_a_load_path(tmp_path):
+    """The magnet moved along a rail (position + along * rail): along a horizontal rail from
+    x0 = 0.5 the folds are those in the horizontal position, shifted by x0; along a tilted
+    rail the magnet's centre is where the rail puts it."""
+    path = tmp_path / "rail.toml"
+    path.write_text(RAIL)
+    direct = load(path)
+    key, _ = direct.input_of("field.0.position.0")
+    ref = [f.value for f in jr.scene_folds(direct.scene, key, 0.0, 1.5, n=16)]
+    railed = load(path, ["field.0.position=[0.5, 1.2]", "field.0.rail=[2.0, 0.0]"])
+    key, factor = railed.input_of("field.0.along")
+    got = [f.value / factor for f in jr.scene_folds(railed.scene, key, -0.5, 1.0, n=16)]
+    assert len(got) == len(ref) == 2
+    assert all(abs(g + 0.5 - r) <= 1e-10 for g, r in zip(got, ref))
+    tilted = load(path, ["field.0.position=[0.0, 1.5]", "field.0.rail=[1.0, -1.0]",
+                         "field.0.along=0.5"])
+    c = np.asarray(tilted.scene.terms["field0"].centre())
+    assert np.allclose(c, [0.5 / math.sqrt(2), 0.0, 1.5 - 0.5 / math.sqrt(2)], atol=1e-15)
+    with pytest.raises(ParameterError, match="field.0.along"):
+        load(path, ["field.0.position=[0.0, 1.5]", "field.0.rail=[0.0, -1.0]",
+                    "field.0.along=0.8"])

@@ -15,9 +15,10 @@ A file in SI units (the default) or, with ``units = "nondimensional"``, in the g
                      anisotropy group), angle_deg;
                      kind = "dipole": a point magnet, by moment (A m^2) or remanence (A/m) and
                      diameter (m) of a sphere, or M (the paper's dipole group), at
-                     position = [x, z] with moment_direction = [ux, uz], or on the paper's
-                     circle: path = "circle", radius (the paper's D), angle_deg (alpha; the
-                     moment radially outward)
+                     position = [x, z] with moment_direction = [ux, uz] (on a straight rail
+                     from there: rail = [ux, uz], along = t), or on the paper's circle:
+                     path = "circle", radius (the paper's D), angle_deg (alpha; the moment
+                     radially outward)
     [gravity]        g (m/s^2, along -z: the rod standing up) or G (rho g A_c L^3 / (E I))
 
 and top-level ``geometry = "planar"`` (default) or ``"3d"``. The terms of the scene are
@@ -61,9 +62,9 @@ FIELD_KEYS = {
     "uniform": {"si": ("kind", "B", "angle_deg"),
                 "nondimensional": ("kind", "load", "A", "angle_deg")},
     "dipole": {"si": ("kind", "moment", "remanence", "diameter", "position",
-                      "moment_direction", "path", "radius", "angle_deg"),
+                      "moment_direction", "path", "radius", "angle_deg", "rail", "along"),
                "nondimensional": ("kind", "M", "position", "moment_direction", "path",
-                                  "radius", "angle_deg")},
+                                  "radius", "angle_deg", "rail", "along")},
 }
 TOP = ("units", "geometry", "rod", "magnetisation", "field", "gravity")
 
@@ -315,7 +316,7 @@ def scene_from(data: dict) -> FileScene:
             inputs[f"{where}{m_key}"] = (f"{name}.M", m_factor)
         half = 0.5 * field["diameter"] / L if si and "diameter" in field else 0.0
         if field.get("path") == "circle":
-            for key in ("position", "moment_direction"):
+            for key in ("position", "moment_direction", "rail", "along"):
                 if key in field:
                     _fail(f"{where}{key}", "a magnet on the circle has its position and "
                                            "moment from radius and angle_deg")
@@ -338,15 +339,21 @@ def scene_from(data: dict) -> FileScene:
         if pos is None:
             _fail(f"{where}position", "missing (or give path = \"circle\")")
         c = np.array([pos[0], 0.0, pos[1]]) / L
-        if np.linalg.norm(c) <= 1.0 + half:
-            _fail(f"{where}position", f"the magnet ({np.linalg.norm(c):g} rod lengths from the "
-                                      "clamp) is within the rod's reach")
         u = _vector(field, "moment_direction", where, [0.0, 1.0])
-        if math.hypot(*u) == 0.0:
-            _fail(f"{where}moment_direction", "must not be zero")
-        terms[name] = PointDipole(M, c, np.array([u[0], 0.0, u[1]]))
+        rail = _vector(field, "rail", where, [1.0, 0.0])
+        for key, v in (("moment_direction", u), ("rail", rail)):
+            if math.hypot(*v) == 0.0:
+                _fail(f"{where}{key}", "must not be zero")
+        along = _number(field, "along", where, required=False, default=0.0) / L
+        rail = np.array([rail[0], 0.0, rail[1]]) / math.hypot(*rail)
+        where_c = f"{where}along" if "along" in field else f"{where}position"
+        if np.linalg.norm(c + along * rail) <= 1.0 + half:
+            _fail(where_c, f"the magnet ({np.linalg.norm(c + along * rail):g} rod lengths from "
+                           "the clamp) is within the rod's reach")
+        terms[name] = PointDipole(M, c, np.array([u[0], 0.0, u[1]]), rail, along)
         inputs[f"{where}position.0"] = (f"{name}.position.0", 1.0 / L)
         inputs[f"{where}position.1"] = (f"{name}.position.2", 1.0 / L)
+        inputs[f"{where}along"] = (f"{name}.along", 1.0 / L)
     scene = Scene(terms, geometry=geometry, support=support)
     return FileScene(scene, inputs, L, data)
 
