@@ -81,6 +81,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "modes": ("jaxrod.dynamics.modes", "modes"),
         "modes_along": ("jaxrod.dynamics.modes", "modes_along"),
         "in_hertz": ("jaxrod.dynamics.modes", "in_hertz"),
+        "simulate": ("jaxrod.dynamics.integrate", "simulate"),
         "fit_folds": ("jaxrod.inverse.scene_fit", "fit_folds"),
         "design_folds": ("jaxrod.inverse.scene_fit", "design_folds"),
         "fold_map": ("jaxrod.bistability.fold_map", "fold_map"),

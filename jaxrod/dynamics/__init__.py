@@ -1,1 +1,2 @@
-"""The rod in time: vibration modes of equilibria (``modes``)."""
+"""The rod in time: vibration modes of equilibria (``modes``) and the motion itself
+(``integrate``)."""

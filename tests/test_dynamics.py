@@ -1,0 +1,110 @@
+"""Time integration: the variational midpoint scheme (period of a mode, energy without
+drift, second order) and BDF2 (L-stable: settles on the static equilibrium; the snap past
+a fold lands where the quasi-static sweep's descent does)."""
+
+import math
+
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod.dynamics.integrate import simulate
+from jaxrod.dynamics.modes import modes
+from jaxrod.params import ParameterError
+
+CANTILEVER = jr.Scene({"bending": jr.Bending()})
+HARD = jr.Scene({"bending": jr.Bending(), "field": jr.Zeeman(5.0, math.pi / 2)})
+
+
+def _period(tr):
+    x = tr.tip_position[:, 0]
+    i = np.nonzero(np.sign(x[:-1]) * np.sign(x[1:]) < 0)[0]
+    t = tr.time[i] - x[i] * (tr.time[i + 1] - tr.time[i]) / (x[i + 1] - x[i])
+    return 2.0 * np.mean(np.diff(t))
+
+
+def test_a_small_oscillation_has_the_modes_period_to_second_order():
+    """Released from its first mode shape, the cantilever swings with period 2 pi / omega_1
+    (the modes' eigenproblem); the midpoint scheme's error falls as dt^2; the energy holds
+    to 1e-8 relative."""
+    m = modes(CANTILEVER, n=12)
+    T = 2 * math.pi / m.omega[0]
+    q0 = 1e-3 * m.shapes[:, 0] / np.max(np.abs(m.shapes[:, 0]))
+    errors = []
+    for div in (50, 100, 200):
+        tr = simulate(CANTILEVER, q0, 3 * T, T / div, n=12)
+        assert tr.converged
+        errors.append(abs(_period(tr) - T) / T)
+        assert np.ptp(tr.energy) <= 1e-8 * np.mean(tr.energy)
+    assert errors[-1] < 1e-4
+    assert 3.5 < errors[0] / errors[1] < 4.5 and 3.5 < errors[1] / errors[2] < 4.5
+
+
+def test_large_motion_energy_without_drift():
+    """The hard-magnetic cantilever released straight in a transverse field (a large swing,
+    undamped): the total energy's spread falls as dt^2 and it does not drift."""
+    spreads = []
+    for dt in (0.01, 0.005, 0.0025):
+        tr = simulate(HARD, np.zeros(16), 2.0, dt, n=16)
+        assert tr.converged and tr.tip_tangent_deg.max() > 100.0
+        spreads.append(np.ptp(tr.energy))
+        half = len(tr.energy) // 2
+        assert abs(np.mean(tr.energy[:half]) - np.mean(tr.energy[half:])) < spreads[-1]
+    assert spreads[0] / spreads[1] > 2.5 and spreads[1] / spreads[2] > 3.0
+
+
+def test_bdf2_settles_on_the_static_equilibrium():
+    eq = jr.equilibrium(HARD, n=16)
+    tr = simulate(HARD, np.zeros(16), 20.0, 0.01, damping=5.0, n=16, scheme="bdf2")
+    assert tr.converged
+    assert abs(tr.tip_tangent_deg[-1] - eq.tip_tangent_deg) <= 1e-7
+    assert np.max(np.abs(tr.states[-1] - eq.state)) <= 1e-9
+
+
+@pytest.mark.parametrize("scheme", ["midpoint", "bdf2"])
+def test_a_damped_mode_decays_as_the_damped_oscillator(scheme):
+    """The first mode released with drag c: each mode obeys x'' + c x' + omega^2 x = 0
+    (the drag acts like the mass), so the tip follows x0 exp(-c t / 2) (cos(w t) +
+    c / (2 w) sin(w t)), w = sqrt(omega^2 - c^2 / 4); both schemes to second order."""
+    m = modes(CANTILEVER, n=12)
+    c, w1 = 0.8, m.omega[0]
+    wd = math.sqrt(w1**2 - c**2 / 4)
+    q0 = 1e-4 * m.shapes[:, 0] / np.max(np.abs(m.shapes[:, 0]))
+    x0 = simulate(CANTILEVER, q0, 1e-9, 1e-9, n=12).tip_position[0, 0]  # the start's tip
+    t_end = 2 * math.pi / wd
+    exact = x0 * math.exp(-c * t_end / 2) * (math.cos(wd * t_end)
+                                             + c / (2 * wd) * math.sin(wd * t_end))
+    errors = []
+    for div in (80, 160, 320):
+        tr = simulate(CANTILEVER, q0, t_end, t_end / div, damping=c, n=12, scheme=scheme)
+        errors.append(abs(tr.tip_position[-1, 0] - exact) / abs(x0))
+    assert errors[-1] < 1e-4
+    # second order (BDF2 from above: its first step is backward Euler)
+    assert 3.3 < errors[0] / errors[1] < 5.0 and 3.3 < errors[1] / errors[2] < 5.0
+
+
+def test_the_snap_past_the_papers_upper_fold_lands_where_the_sweep_does():
+    """The magnet moved 0.05 degrees past the upper fold: from the fold state the rod snaps
+    (damped) and comes to rest on the disengaged state, the one the quasi-static sweep's
+    energy descent lands on."""
+    scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(2.2),
+                      "magnet": jr.Dipole(0.0236, 11.25 / 9.2, 0.0)})
+    fold = max(jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2), key=lambda f: f.value)
+    past = fold.value + math.radians(0.05)
+    tr = simulate(scene.replace("magnet.alpha", past), fold.state, 40.0, 0.02, damping=3.0,
+                  scheme="bdf2")
+    assert tr.converged
+    sweep = jr.scene_sweep(scene, "magnet.alpha",
+                           np.radians(np.r_[0.0:math.degrees(fold.value):0.5]).tolist()
+                           + [past])
+    landing = sweep.snaps[-1]["tip_after_deg"]
+    assert tr.tip_angle_deg[0] > landing + 10.0  # it started engaged
+    assert abs(tr.tip_angle_deg[-1] - landing) <= 1e-6
+
+
+@pytest.mark.parametrize("kw, match", [({"dt": 0.0}, "dt"), ({"damping": -1.0}, "damping"),
+                                       ({"scheme": "rk4"}, "scheme")])
+def test_bad_requests(kw, match):
+    args = {"state": np.zeros(16), "t_end": 1.0, "dt": 0.01} | kw
+    with pytest.raises(ParameterError, match=match):
+        simulate(HARD, **args)
