@@ -82,6 +82,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "modes_along": ("jaxrod.dynamics.modes", "modes_along"),
         "in_hertz": ("jaxrod.dynamics.modes", "in_hertz"),
         "simulate": ("jaxrod.dynamics.integrate", "simulate"),
+        "snap": ("jaxrod.dynamics.snap", "snap"),
         "fit_folds": ("jaxrod.inverse.scene_fit", "fit_folds"),
         "design_folds": ("jaxrod.inverse.scene_fit", "design_folds"),
         "fold_map": ("jaxrod.bistability.fold_map", "fold_map"),

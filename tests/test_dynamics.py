@@ -108,3 +108,24 @@ def test_bad_requests(kw, match):
     args = {"state": np.zeros(16), "t_end": 1.0, "dt": 0.01} | kw
     with pytest.raises(ParameterError, match=match):
         simulate(HARD, **args)
+
+
+def test_cli_snap_json():
+    """jaxrod snap from the paper's upper fold: the time series and a duration; the rod comes
+    to rest on the disengaged state (stable), having lost energy to the drag."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "snap", "--G", "2.2", "--M",
+                           "0.0236", "--D", "1.2228", "--fold", "upper", "--damping", "1",
+                           "--json"], capture_output=True, text=True, timeout=600,
+                          env={**os.environ, "JAXROD_NO_CACHE": "1"})
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert {"duration", "time", "tip_angle_deg", "energy", "kinetic"} <= set(out)
+    assert out["duration"] > 0 and out["rest_stable"]
+    assert out["rest_tip_deg"] < out["tip_angle_deg"][0] - 10.0  # it let go
+    assert out["energy"][-1] < out["energy"][0]
+    assert len(out["time"]) == len(out["tip_angle_deg"]) == len(out["kinetic"])

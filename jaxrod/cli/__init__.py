@@ -1,6 +1,7 @@
 """Command-line front end: ``jaxrod greenhill | equilibrium | folds | branch | sweep | fit |
-design | certify | outofplane | track | cusp | foldcurve | map | modes | reproduce`` (``jaxrod -h``
-lists them); ``equilibrium``, ``folds`` and ``branch`` also take a scene file (any rig).
+design | certify | outofplane | track | cusp | foldcurve | map | modes | snap | reproduce``
+(``jaxrod -h`` lists them); ``equilibrium``, ``folds``, ``branch``, ``foldcurve``, ``map``,
+``fit``, ``design`` and ``modes`` also take a scene file (any rig).
 
 Every command prints a human-readable report, or one JSON object with ``--json``. Invalid
 input exits with status 2 and a one-line message naming the parameter. One module per
@@ -22,7 +23,7 @@ import sys
 from jaxrod.cli._inputs import BATCH_N
 from jaxrod.cli._output import _enable_compilation_cache
 from jaxrod.cli.bistability import add_cusp, add_foldcurve, add_map
-from jaxrod.cli.dynamics import add_modes
+from jaxrod.cli.dynamics import add_modes, add_snap
 from jaxrod.cli.inverse import add_design, add_fit
 from jaxrod.cli.magnet import add_branch, add_certify, add_folds, add_sweep
 from jaxrod.cli.reproduce import add_reproduce
@@ -56,7 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_OneLineErrorParser)
     for add in (add_greenhill, add_equilibrium, add_folds, add_outofplane, add_track,
                 add_certify, add_branch, add_sweep, add_fit, add_design, add_cusp,
-                add_foldcurve, add_map, add_modes, add_reproduce):
+                add_foldcurve, add_map, add_modes, add_snap, add_reproduce):
         add(sub)
     return parser
 

@@ -1,0 +1,84 @@
+"""The snap: the motion from a fold of any scene to where the rod comes to rest.
+
+The input that the fold is met along is moved a little past the fold (``past``, to the side
+where the branch has no equilibrium nearby), and the motion from the fold's state at rest
+is integrated (``jaxrod.dynamics.integrate``, BDF2) with drag ``damping``. Defined, from
+the tip's direction (degrees from +z toward +x):
+
+    leave     the first time the tip is more than ``band`` from its start (the fold's tip);
+    settle    the last time it is more than ``band`` from where it comes to rest;
+    duration  settle - leave (None when the motion has not settled by t_end: raise t_end,
+              or add damping).
+
+The resting state is the last state polished by Newton (a static equilibrium), with its
+stability. Near the fold the rod leaves slowly (the normal form's bottleneck), so
+``leave`` depends on ``past``; the duration hardly does.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from jaxrod.dynamics.integrate import Trajectory, simulate
+from jaxrod.equilibria.equilibrium import DEFAULT_N, equilibrium
+from jaxrod.equilibria.folds import Fold
+from jaxrod.params import ParameterError
+from jaxrod.scenes.scene import Scene
+
+
+@dataclasses.dataclass(frozen=True)
+class Snap:
+    """A snap from a fold: the trajectory, the moved input's value, leave/settle/duration
+    (module docstring), where it rests (tip direction, stable), the largest tip speed
+    (degrees per unit time) and the overshoot past the resting tip (degrees)."""
+
+    trajectory: Trajectory
+    value: float
+    leave: float | None
+    settle: float | None
+    duration: float | None
+    rest_tip_deg: float
+    rest_stable: bool
+    peak_tip_speed: float
+    overshoot_deg: float
+    band_deg: float
+
+    def as_dict(self) -> dict:
+        return self.trajectory.as_dict() | {
+            "value": self.value, "leave": self.leave, "settle": self.settle,
+            "duration": self.duration, "rest_tip_deg": self.rest_tip_deg,
+            "rest_stable": self.rest_stable, "peak_tip_speed_deg": self.peak_tip_speed,
+            "overshoot_deg": self.overshoot_deg, "band_deg": self.band_deg}
+
+
+def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: float = 0.01,
+         past: float = 1e-3, band: float = 0.5, n: int = DEFAULT_N) -> Snap:
+    """The snap from ``fold`` (of ``scene``, from ``jr.scene_folds``) with drag ``damping``;
+    ``past``: how far the input is moved past the fold (its units), ``band``: degrees."""
+    if not fold.converged:
+        raise ParameterError("fold: the fold did not converge; refine it first")
+    for name, v in (("past", past), ("band", band)):
+        if not (math.isfinite(v) and v > 0):
+            raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
+    # past the fold: to the side where the branch has no equilibrium next to the fold
+    side = -1.0 if fold.normal_form_c > 0 else 1.0
+    value = fold.value + side * past
+    at = scene.replace(fold.vary, value)
+    tr = simulate(at, fold.state, t_end, dt, damping=damping, n=n, scheme="bdf2")
+    rest = equilibrium(at, n=n, state=tr.states[-1], throw=False)
+    tip = tr.tip_angle_deg
+    away = np.abs(tip - fold.tip_angle_deg) > band
+    leave = float(tr.time[np.argmax(away)]) if away.any() else None
+    off = np.abs(tip - rest.tip_angle_deg) > band
+    settled = rest.converged and not off[-1] and damping > 0
+    settle = float(tr.time[np.nonzero(off)[0][-1] + 1]) if settled and off.any() else None
+    speed = np.abs(np.diff(np.r_[fold.tip_angle_deg, tip])) / dt
+    direction = np.sign(rest.tip_angle_deg - fold.tip_angle_deg)
+    overshoot = float(max(0.0, np.max(direction * (tip - rest.tip_angle_deg))))
+    return Snap(trajectory=tr, value=value, leave=leave, settle=settle,
+                duration=None if leave is None or settle is None else settle - leave,
+                rest_tip_deg=rest.tip_angle_deg, rest_stable=rest.stable,
+                peak_tip_speed=float(np.max(speed)), overshoot_deg=overshoot, band_deg=band)
