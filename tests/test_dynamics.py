@@ -129,3 +129,44 @@ def test_cli_snap_json():
     assert out["rest_tip_deg"] < out["tip_angle_deg"][0] - 10.0  # it let go
     assert out["energy"][-1] < out["energy"][0]
     assert len(out["time"]) == len(out["tip_angle_deg"]) == len(out["kinetic"])
+
+
+@pytest.mark.parametrize("damping, exponent, tol", [(10.0, 2.0 / 3.0, 0.03),
+                                                    (0.5, 0.8, 0.05)])
+def test_the_switching_lag_follows_the_folds_normal_form(damping, exponent, tol):
+    """The magnet swept past the paper's upper fold at rates 0.01-0.1 degrees per unit time:
+    the switch lags the static fold by eps^(2/3) where the drag dominates (c = 10) and close
+    to eps^(4/5) where inertia does (c = 0.5: the measured slope approaches 0.8 from
+    below), the normal form's exponents (Liu, Gomez and Vella, JMPS 2021)."""
+    from jaxrod.dynamics.rate_sweep import rate_sweep
+
+    scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(2.2),
+                      "magnet": jr.Dipole(0.0236, 11.25 / 9.2, 0.0)})
+    fold = max(jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2), key=lambda f: f.value)
+    a0 = math.radians(38.5)
+    held = jr.scene_sweep(scene, "magnet.alpha", np.radians(np.r_[0:38.51:0.5]).tolist())
+    rates = np.radians([0.01, 0.03, 0.1])
+    lags = []
+    for rate in rates:
+        s = rate_sweep(scene.replace("magnet.alpha", a0), "magnet.alpha", held.states[-1],
+                       math.radians(41.5), rate, damping)
+        assert s.trajectory.converged and len(s.switches) == 1
+        lags.append(s.switches[0] - fold.value)
+    assert all(lag > 0 for lag in lags)
+    slopes = np.diff(np.log(lags)) / np.diff(np.log(rates))
+    assert np.all(np.abs(slopes - exponent) < tol), slopes
+
+
+def test_cli_sweep_at_a_rate():
+    import json
+    import os
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "sweep", "--G", "2.2", "--M",
+                           "0.0236", "--D", "1.2228", "--rate", "0.1", "--damping", "10",
+                           "--from", "38.5", "--to", "41.5", "--json"], capture_output=True,
+                          text=True, timeout=600, env={**os.environ, "JAXROD_NO_CACHE": "1"})
+    assert proc.returncode == 0, proc.stderr
+    (switch,) = json.loads(proc.stdout)["switch_alpha_deg"]
+    assert 39.31 < switch < 41.0  # after the static fold at 39.3134 degrees

@@ -100,6 +100,64 @@ def cmd_snap(args) -> int:
     return 0 if s.trajectory.converged else 1
 
 
+def rate_sweep_command(args) -> int:
+    """``jaxrod sweep --G --M --D --rate R --damping C --from A --to B``: the magnet moved
+    from A to B degrees at R degrees per unit time, from rest on the state a quasi-static
+    sweep in the same direction holds at A (engaged moving away from the vertical,
+    disengaged moving towards it)."""
+    import numpy as np
+
+    import jaxrod as jr
+    from jaxrod.dynamics.rate_sweep import rate_sweep
+
+    a, b = args.start_deg, args.stop_deg
+    if a is None or b is None or a == b or not all(-90 <= v <= 90 for v in (a, b)):
+        raise ParameterError("from/to: give --from A --to B, different magnet angles in "
+                             "[-90, 90] degrees")
+    if args.G is None or args.M is None or args.D is None:
+        raise ParameterError("G: a sweep at a finite rate takes --G --M --D")
+    if not (math.isfinite(args.rate) and args.rate > 0):
+        raise ParameterError(f"rate must be a finite number > 0 (deg per unit time), got "
+                             f"{args.rate!r}")
+    if not (math.isfinite(args.damping) and args.damping >= 0):
+        raise ParameterError(f"damping must be a finite number >= 0, got {args.damping!r}")
+    scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(args.G),
+                      "magnet": jr.Dipole(args.M, args.D, 0.0)})
+    n = args.n or 16
+    origin = 0.0 if abs(b) > abs(a) else math.copysign(90.0, a if a else b)
+    path = np.radians(np.linspace(origin, a, max(2, int(abs(a - origin) / 0.25) + 1)))
+    held = jr.scene_sweep(scene, "magnet.alpha", path.tolist(), n=n)
+    s = rate_sweep(scene.replace("magnet.alpha", math.radians(a)), "magnet.alpha",
+                   held.states[-1], math.radians(b), math.radians(args.rate), args.damping,
+                   dt=args.dt, n=n)
+    out = {"G": args.G, "M": args.M, "D": args.D, "rate_deg": args.rate,
+           "damping": args.damping, "from_deg": a, "to_deg": b,
+           "switch_alpha_deg": [math.degrees(v) for v in s.switches],
+           "alpha_deg": np.degrees(s.values).tolist(), "time": s.trajectory.time.tolist(),
+           "tip_angle_deg": s.trajectory.tip_angle_deg.tolist(),
+           "converged": s.trajectory.converged}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"magnet from {a:g} to {b:g} deg at {args.rate:g} deg per unit time, drag "
+              f"{args.damping:g}: switched at " + (", ".join(
+                  f"{v:.6f}" for v in out["switch_alpha_deg"]) or "no angle") + " deg")
+    return 0 if s.trajectory.converged else 1
+
+
+def add_rate_sweep_options(w) -> None:
+    w.add_argument("--rate", type=_float("rate"), default=None,
+                   help="a sweep at a finite rate: the magnet's speed, deg per unit time "
+                   "(time in L^2 sqrt(rho A_c / (E I)))")
+    w.add_argument("--damping", type=_float("damping"), default=1.0,
+                   help="with --rate: the drag per unit length (sqrt(rho A_c E I) / L^2)")
+    w.add_argument("--from", dest="start_deg", type=_float("from"), default=None,
+                   help="with --rate: the magnet's first angle, deg")
+    w.add_argument("--to", dest="stop_deg", type=_float("to"), default=None,
+                   help="with --rate: its last angle, deg")
+    w.add_argument("--dt", type=_float("dt"), default=0.05, help="with --rate: time step")
+
+
 def add_snap(sub) -> None:
     sn = sub.add_parser("snap", help="the snap from a fold of the permanent-magnet scene "
                         "(time series, duration)")

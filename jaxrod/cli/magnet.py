@@ -8,6 +8,7 @@ from pathlib import Path
 
 from jaxrod.cli._inputs import _entry, _float, _magnet_scene_from_args, _source, add_magnet_inputs
 from jaxrod.cli._output import _header, _not_converged, _output_dir
+from jaxrod.cli.dynamics import add_rate_sweep_options
 from jaxrod.cli.scene_file import (
     add_scene_file_inputs,
     branch_on_file,
@@ -165,6 +166,12 @@ def cmd_sweep(args) -> int:
     from jaxrod.plotting import hysteresis_figure
     from jaxrod.progress import Interrupted, progress_bar
 
+    if args.rate is not None:
+        from jaxrod.cli.dynamics import rate_sweep_command
+
+        return rate_sweep_command(args)
+    if args.out is None:
+        raise ParameterError("out: give --out DIR (sweep.csv, sweep.png, sweep.json)")
     scene, info = _magnet_scene_from_args(args)
     out_dir = _output_dir(args.out)
     for name, default in (("alpha_max", 50.0), ("step", 0.25)):
@@ -244,9 +251,11 @@ def add_branch(sub) -> None:
 
 
 def add_sweep(sub) -> None:
-    w = sub.add_parser("sweep", help="quasi-static hysteresis sweep (CSV, PNG, JSON)")
+    w = sub.add_parser("sweep", help="quasi-static hysteresis sweep (CSV, PNG, JSON), or at a "
+                       "finite rate (--rate)")
     add_magnet_inputs(w)
-    w.add_argument("--out", required=True, help="output directory")
+    w.add_argument("--out", help="output directory (the quasi-static sweep)")
+    add_rate_sweep_options(w)
     w.add_argument("--alpha-max", type=_float("alpha-max", "alpha-max"), default=None,
                    help="sweep from -alpha_max to +alpha_max and back (deg, in (0, 90]; "
                    "default 50)")
