@@ -322,13 +322,30 @@ def _rail_position_of_k(k, guess, G=2.2, M=0.25, z=1.2):
     return fsolve(F, guess, xtol=1e-13)
 
 
+def rail_folds_by_shooting(M, z):
+    """(release, capture) of the rail rig at (M, z): the extrema of the rail position along
+    the branch parametrised by theta'(0) (shooting)."""
+    from scipy.optimize import minimize_scalar
+
+    guess = {"x": np.array([1.0, 0.2, 0.97])}
+
+    def rail(k, sign):
+        v = _rail_position_of_k(k, guess["x"], M=M, z=z)
+        guess["x"] = v
+        return sign * v[0]
+
+    lo = minimize_scalar(lambda k: rail(k, 1.0), bounds=(0.4, 0.8), method="bounded",
+                         options={"xatol": 1e-10})
+    hi = minimize_scalar(lambda k: rail(k, -1.0), bounds=(1.1, 1.55), method="bounded",
+                         options={"xatol": 1e-10})
+    return -hi.fun, lo.fun
+
+
 def test_a_magnet_on_a_straight_rail_folds_against_shooting(tmp_path):
     """The paper's soft wire and a magnet moved along a straight rail above it (moment up):
     capture and release are folds in the rail position, found by the engine along
     field.0.position.0 and, independently, as the extrema of the rail position along the
     branch parametrised by theta'(0) (shooting); agreement to 1e-9 rod lengths."""
-    from scipy.optimize import minimize_scalar
-
     path = tmp_path / "rail.toml"
     path.write_text(RAIL)
     file = load(path)
@@ -336,19 +353,9 @@ def test_a_magnet_on_a_straight_rail_folds_against_shooting(tmp_path):
     folds = jr.scene_folds(file.scene, key, 0.0, 1.5, n=24)
     assert len(folds) == 2
     release, capture = sorted(f.value / factor for f in folds)[::-1]
-    guess = {"x": np.array([1.0, 0.2, 0.97])}
-
-    def rail(k, sign):
-        v = _rail_position_of_k(k, guess["x"])
-        guess["x"] = v
-        return sign * v[0]
-
-    lo = minimize_scalar(lambda k: rail(k, 1.0), bounds=(0.45, 0.75), method="bounded",
-                         options={"xatol": 1e-10})
-    hi = minimize_scalar(lambda k: rail(k, -1.0), bounds=(1.2, 1.45), method="bounded",
-                         options={"xatol": 1e-10})
-    assert abs(capture - lo.fun) <= 1e-9
-    assert abs(release + hi.fun) <= 1e-9
+    ref_release, ref_capture = rail_folds_by_shooting(0.25, 1.2)
+    assert abs(capture - ref_capture) <= 1e-9
+    assert abs(release - ref_release) <= 1e-9
 
 
 def test_cli_foldcurve_on_a_scene_file_passes_the_cusp_of_the_pitchfork():

@@ -3,32 +3,13 @@ shooting, an independent method), and a design verified by shooting at the answe
 
 import json
 
-import numpy as np
 import pytest
-from scipy.optimize import minimize_scalar
-from test_scene_files import RAIL, _cli, _rail_position_of_k
+from test_scene_files import RAIL, _cli, rail_folds_by_shooting
 
 import jaxrod as jr
 from jaxrod.inverse.scene_fit import design_folds, fit_folds
 from jaxrod.params import ParameterError
 from jaxrod.scenes.files import load
-
-
-def rail_folds_by_shooting(M, z):
-    """(release, capture) of the rail rig at (M, z): the extrema of the rail position along
-    the branch parametrised by theta'(0) (shooting)."""
-    guess = {"x": np.array([1.0, 0.2, 0.97])}
-
-    def rail(k, sign):
-        v = _rail_position_of_k(k, guess["x"], M=M, z=z)
-        guess["x"] = v
-        return sign * v[0]
-
-    lo = minimize_scalar(lambda k: rail(k, 1.0), bounds=(0.4, 0.8), method="bounded",
-                         options={"xatol": 1e-10})
-    hi = minimize_scalar(lambda k: rail(k, -1.0), bounds=(1.1, 1.55), method="bounded",
-                         options={"xatol": 1e-10})
-    return -hi.fun, lo.fun
 
 
 @pytest.fixture(scope="module")

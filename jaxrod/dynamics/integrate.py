@@ -42,36 +42,32 @@ def _scene_at(scene, vary, start, rate, t):
     return scene if vary is None else scene.replace(vary, start + rate * t)
 
 
+def _action(q0, q1, h, scene, disc):
+    """L_d(q0, q1): the kinetic term from the positions' differences, the potential at the
+    midpoint."""
+    dr = positions(scene, q1, disc) - positions(scene, q0, disc)
+    kinetic = 0.5 * jnp.sum(disc.quad_weights[:, None] * dr**2) / h
+    return kinetic - h * FIXED.energy(0.5 * (q0 + q1), 0.0, (scene, disc))
+
+
+def _drag(q0, q1, c, scene, disc):
+    """f^- = f^+ = -(c / 2) J(q_mid)^T W (r(q1) - r(q0))."""
+    dr = positions(scene, q1, disc) - positions(scene, q0, disc)
+    _, pullback = jax.vjp(lambda q: positions(scene, q, disc), 0.5 * (q0 + q1))
+    return -0.5 * c * pullback(disc.quad_weights[:, None] * dr)[0]
+
+
 def _step_residual(q1, args):
+    """p_k + D_1 L_d(q_k, q_{k+1}) + f^-(q_k, q_{k+1})."""
     q0, p0, h, c, scene_mid, disc = args
-    W = disc.quad_weights[:, None]
-
-    def action(a, b):
-        dr = positions(scene_mid, b, disc) - positions(scene_mid, a, disc)
-        kinetic = 0.5 * jnp.sum(W * dr**2) / h
-        return kinetic - h * FIXED.energy(0.5 * (a + b), 0.0, (scene_mid, disc))
-
-    d1 = jax.grad(action, argnums=0)(q0, q1)
-    qm = 0.5 * (q0 + q1)
-    dr = positions(scene_mid, q1, disc) - positions(scene_mid, q0, disc)
-    _, pullback = jax.vjp(lambda q: positions(scene_mid, q, disc), qm)
-    force = -0.5 * c * pullback(W * dr)[0]
-    return p0 + d1 + force
+    return p0 + jax.grad(_action, argnums=0)(q0, q1, h, scene_mid, disc) \
+        + _drag(q0, q1, c, scene_mid, disc)
 
 
 def _momentum(q0, q1, h, c, scene_mid, disc):
-    W = disc.quad_weights[:, None]
-
-    def action(a, b):
-        dr = positions(scene_mid, b, disc) - positions(scene_mid, a, disc)
-        return 0.5 * jnp.sum(W * dr**2) / h - h * FIXED.energy(0.5 * (a + b), 0.0,
-                                                               (scene_mid, disc))
-
-    d2 = jax.grad(action, argnums=1)(q0, q1)
-    qm = 0.5 * (q0 + q1)
-    dr = positions(scene_mid, q1, disc) - positions(scene_mid, q0, disc)
-    _, pullback = jax.vjp(lambda q: positions(scene_mid, q, disc), qm)
-    return d2 - 0.5 * c * pullback(W * dr)[0]
+    """p_{k+1} = D_2 L_d(q_k, q_{k+1}) + f^+(q_k, q_{k+1})."""
+    return jax.grad(_action, argnums=1)(q0, q1, h, scene_mid, disc) \
+        + _drag(q0, q1, c, scene_mid, disc)
 
 
 def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate):
