@@ -34,7 +34,7 @@ from jaxrod.derivatives import Structured
 from jaxrod.equilibria.branch import _observed, branch, branch_options, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
 from jaxrod.equilibria.folds import _span
-from jaxrod.equilibria.record import Branch, branch_from_runs
+from jaxrod.equilibria.record import Branch, SpecialPoint, branch_from_runs, checked
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.scene import Input, Scene
@@ -44,35 +44,15 @@ from jaxrod.status import SolverError, Status
 
 
 @dataclasses.dataclass(frozen=True)
-class BranchPoint:
-    """A branch point of a scene's branch in the input ``vary``, refined by Moore-Spence.
+class BranchPoint(SpecialPoint):
+    """A branch point of a scene's branch in the input ``vary``, refined by Moore's system
+    (``SpecialPoint``'s fields; ``null_vector``, the bifurcating branch's direction,
+    normalised by int phi = 1 where that is not zero), with ``unfolding``: mu of the
+    augmented system (zero at the solution, to round-off), and ``morse_index``: the index
+    before and after it along the branch."""
 
-    ``value``: the input there; ``tip_angle_deg`` (the tip's direction from +z toward +x)
-    and ``tip_position`` of the state; ``null_vector``: the Hessian's kernel (the
-    bifurcating branch's direction), normalised by int phi = 1 where that is not zero;
-    ``unfolding``: mu of the augmented system (zero at the solution, to round-off);
-    ``morse_index``: the index before and after it along the branch.
-    """
-
-    vary: str
-    value: float
-    tip_angle_deg: float
-    tip_position: np.ndarray
-    state: np.ndarray
-    null_vector: np.ndarray
     unfolding: float
     morse_index: tuple[int, int]
-    converged: bool
-    residual_norm: float
-    iterations: int
-    status: Status
-
-    def as_dict(self) -> dict:
-        return {"value": self.value, "tip_angle_deg": self.tip_angle_deg,
-                "tip_position": [float(v) for v in self.tip_position],
-                "unfolding": self.unfolding, "morse_index": list(self.morse_index),
-                "converged": self.converged, "residual_norm": self.residual_norm,
-                "iterations": self.iterations}
 
 
 def stability_changes(b: Branch) -> np.ndarray:
@@ -138,17 +118,14 @@ def refine_branch_points(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Br
 def branch_points(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
                   state=None, throw: bool = True) -> list[BranchPoint]:
     """The branch points met along the branch of ``scene`` as ``vary`` goes from ``start``
-    to ``stop`` (in the order met), each refined by Moore-Spence (module docstring).
+    to ``stop`` (in the order met), each refined by Moore's augmented system (module
+    docstring).
 
     ``throw``: raise ``SolverError`` if a refinement does not converge.
     """
     start, stop = check_range(scene, vary, start, stop)
-    found = refine_branch_points(scene, branch(scene, vary, start, stop, n, state), n)
-    if throw:
-        for p in found:
-            if not p.converged:
-                raise SolverError(p.status, f"the branch point near {vary} = {p.value:.6g}")
-    return found
+    return checked(refine_branch_points(scene, branch(scene, vary, start, stop, n, state), n),
+                   "branch point", throw)
 
 
 def _switch_residual(y, args):

@@ -24,42 +24,24 @@ import numpy as np
 from jaxrod.derivatives import Structured
 from jaxrod.equilibria.branch import branch, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
-from jaxrod.equilibria.record import Branch
+from jaxrod.equilibria.record import Branch, SpecialPoint, checked
 from jaxrod.programs import jit
 from jaxrod.scenes.scene import Input, Scene
 from jaxrod.solvers.folds import coefficients_at_fold, moore_spence_solve
-from jaxrod.status import SolverError, Status
+from jaxrod.status import Status
 
 
 @dataclasses.dataclass(frozen=True)
-class Fold:
-    """A fold of a scene's branch in the input ``vary``, refined by Moore-Spence.
-
-    ``value``: the input at the fold; ``tip_angle_deg`` from +z toward +x; ``dF_dvalue``,
-    ``d2F_dq2``, ``normal_form_c``: the normal form (module docstring) in the input's units.
+class Fold(SpecialPoint):
+    """A fold of a scene's branch in the input ``vary``, refined by Moore-Spence
+    (``SpecialPoint``'s fields), with ``q`` = int theta there and its normal form:
+    ``dF_dvalue``, ``d2F_dq2``, ``normal_form_c`` (module docstring) in the input's units.
     """
 
-    vary: str
-    value: float
-    tip_angle_deg: float
-    tip_position: np.ndarray
     q: float
     dF_dvalue: float
     d2F_dq2: float
     normal_form_c: float
-    state: np.ndarray
-    null_vector: np.ndarray
-    converged: bool
-    residual_norm: float
-    iterations: int
-    status: Status
-
-    def as_dict(self) -> dict:
-        return {"value": self.value, "tip_angle_deg": self.tip_angle_deg,
-                "tip_position": [float(v) for v in self.tip_position], "q": self.q,
-                "dF_dvalue": self.dF_dvalue, "d2F_dq2": self.d2F_dq2,
-                "normal_form_c": self.normal_form_c, "converged": self.converged,
-                "residual_norm": self.residual_norm, "iterations": self.iterations}
 
 
 def _refine_one(x0, lam0, scene, disc, origin, span, vary):
@@ -120,9 +102,4 @@ def folds(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_N
     ``throw``: raise ``SolverError`` if a fold's refinement does not converge.
     """
     start, stop = check_range(scene, vary, start, stop)
-    found = refine(scene, branch(scene, vary, start, stop, n, state), n)
-    if throw:
-        for f in found:
-            if not f.converged:
-                raise SolverError(f.status, f"the fold near {vary} = {f.value:.6g}")
-    return found
+    return checked(refine(scene, branch(scene, vary, start, stop, n, state), n), "fold", throw)

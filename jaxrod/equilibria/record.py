@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from jaxrod.solvers.continuation import RawBranch
-from jaxrod.status import Status
+from jaxrod.status import SolverError, Status
 
 
 @dataclasses.dataclass(frozen=True)
@@ -143,3 +143,43 @@ def branch_from_runs(runs: list[tuple[RawBranch, bool, tuple]]) -> Branch:
                   energy=cat["energy"], min_eig=cat["min_eig"], morse_index=cat["morse_index"],
                   tangent_value=cat["tangent_lam"], newton_iterations=cat["newton_iterations"],
                   residual_norm=cat["residual_norm"], status=tuple(status), complete=complete)
+
+
+@dataclasses.dataclass(frozen=True)
+class SpecialPoint:
+    """A special point of a branch in the input ``vary`` (a fold, a branch point), refined:
+    ``value`` the input there, ``tip_angle_deg`` (the tip's direction from +z toward +x) and
+    ``tip_position`` of its ``state``, the Hessian's kernel ``null_vector``, and the
+    refinement's ``converged``, ``residual_norm``, ``iterations`` and ``status``."""
+
+    vary: str
+    value: float
+    tip_angle_deg: float
+    tip_position: np.ndarray
+    state: np.ndarray
+    null_vector: np.ndarray
+    converged: bool
+    residual_norm: float
+    iterations: int
+    status: Status
+
+    def as_dict(self) -> dict:
+        """The scalars (the arrays ``state`` and ``null_vector`` left out)."""
+        out = {}
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if f.name in ("state", "null_vector", "vary", "status"):
+                continue
+            out[f.name] = [float(x) for x in v] if f.name == "tip_position" else \
+                list(v) if isinstance(v, tuple) else v
+        return out
+
+
+def checked(points: list, kind: str, throw: bool) -> list:
+    """``points`` (special points); with ``throw``, ``SolverError`` for the first one whose
+    refinement did not converge."""
+    if throw:
+        for p in points:
+            if not p.converged:
+                raise SolverError(p.status, f"the {kind} near {p.vary} = {p.value:.6g}")
+    return points
