@@ -170,3 +170,46 @@ def test_cli_sweep_at_a_rate():
     assert proc.returncode == 0, proc.stderr
     (switch,) = json.loads(proc.stdout)["switch_alpha_deg"]
     assert 39.31 < switch < 41.0  # after the static fold at 39.3134 degrees
+
+
+def test_time_scale_and_lambs_drag():
+    """T = L^2 sqrt(rho A / (E I)) = 2 L^2 sqrt(rho / E) / r for a round rod; Lamb's
+    coefficient 4 pi mu / (1/2 - gamma - ln(Re / 8)); the nondimensional drag c T / (rho A)."""
+    from jaxrod.dynamics.drag import lamb_drag, nondimensional_damping, time_scale
+
+    L, r, E, rho = 0.092, 25e-6, 200e9, 9000.0
+    assert time_scale(L, r, E, rho) == pytest.approx(2 * L**2 * math.sqrt(rho / E) / r,
+                                                     rel=1e-14)
+    mu, rho_f, U = 1.81e-5, 1.204, 0.2
+    re = rho_f * U * 2 * r / mu
+    assert lamb_drag(r, U) == pytest.approx(
+        4 * math.pi * mu / (0.5 - 0.5772156649015329 - math.log(re / 8)), rel=1e-14)
+    c = lamb_drag(r, U)
+    assert nondimensional_damping(c, L, r, E, rho) == pytest.approx(
+        c * time_scale(L, r, E, rho) / (rho * math.pi * r**2), rel=1e-14)
+    with pytest.raises(ParameterError, match="Reynolds"):
+        lamb_drag(r, 1e3)
+
+
+def test_cli_snap_of_the_papers_wire_in_seconds():
+    """The paper's question: its 50 um nickel wire snapping off the magnet in air (Lamb's
+    drag at the snap's speed) settles; in vacuum (no damping modelled) it does not, and its
+    first passage is quicker."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    runs = {}
+    for medium in ("air", "vacuum"):
+        proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "snap", "--preset",
+                               "permanent-magnet", "--medium", medium, "--json"],
+                              capture_output=True, text=True, timeout=600,
+                              env={**os.environ, "JAXROD_NO_CACHE": "1"})
+        assert proc.returncode == 0, proc.stderr
+        runs[medium] = json.loads(proc.stdout)
+    air, vacuum = runs["air"], runs["vacuum"]
+    assert 0.1 < air["time_scale_s"] < 0.2 and air["damping"] > 0 and vacuum["damping"] == 0
+    assert air["duration_s"] > air["transit_s"] > 0 and vacuum["duration_s"] is None
+    assert vacuum["transit_s"] < air["transit_s"]
+    assert abs(air["rest_tip_deg"] - vacuum["rest_tip_deg"]) < 1e-6

@@ -6,13 +6,15 @@ is integrated (``jaxrod.dynamics.integrate``, BDF2) with drag ``damping``. Defin
 the tip's direction (degrees from +z toward +x):
 
     leave     the first time the tip is more than ``band`` from its start (the fold's tip);
+    arrive    the first time after that it is within ``band`` of where it comes to rest;
     settle    the last time it is more than ``band`` from where it comes to rest;
     duration  settle - leave (None when the motion has not settled by t_end: raise t_end,
-              or add damping).
+              or add damping); ``transit`` = arrive - leave, defined without damping too.
 
 The resting state is the last state polished by Newton (a static equilibrium), with its
-stability. Near the fold the rod leaves slowly (the normal form's bottleneck), so
-``leave`` depends on ``past``; the duration hardly does.
+stability; without enough damping to settle by t_end, it is where the same start comes to
+rest with the drag raised to 2. Near the fold the rod leaves slowly (the normal form's
+bottleneck), so ``leave`` depends on ``past``; the duration hardly does.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ class Snap:
     trajectory: Trajectory
     value: float
     leave: float | None
+    arrive: float | None
     settle: float | None
     duration: float | None
     rest_tip_deg: float
@@ -46,10 +49,15 @@ class Snap:
     overshoot_deg: float
     band_deg: float
 
+    @property
+    def transit(self) -> float | None:
+        return None if self.leave is None or self.arrive is None else self.arrive - self.leave
+
     def as_dict(self) -> dict:
         return self.trajectory.as_dict() | {
-            "value": self.value, "leave": self.leave, "settle": self.settle,
-            "duration": self.duration, "rest_tip_deg": self.rest_tip_deg,
+            "value": self.value, "leave": self.leave, "arrive": self.arrive,
+            "settle": self.settle, "duration": self.duration, "transit": self.transit,
+            "rest_tip_deg": self.rest_tip_deg,
             "rest_stable": self.rest_stable, "peak_tip_speed_deg": self.peak_tip_speed,
             "overshoot_deg": self.overshoot_deg, "band_deg": self.band_deg}
 
@@ -69,16 +77,23 @@ def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: floa
     at = scene.replace(fold.vary, value)
     tr = simulate(at, fold.state, t_end, dt, damping=damping, n=n, scheme="bdf2")
     rest = equilibrium(at, n=n, state=tr.states[-1], throw=False)
+    if not (rest.converged and rest.stable and tr.kinetic[-1] < 1e-8):
+        damped = simulate(at, fold.state, t_end, dt, damping=max(damping, 2.0), n=n,
+                          scheme="bdf2")
+        rest = equilibrium(at, n=n, state=damped.states[-1], throw=False)
     tip = tr.tip_angle_deg
     away = np.abs(tip - fold.tip_angle_deg) > band
     leave = float(tr.time[np.argmax(away)]) if away.any() else None
     off = np.abs(tip - rest.tip_angle_deg) > band
+    i_leave = int(np.argmax(away)) if away.any() else len(tip)
+    inside = np.nonzero(~off[i_leave:])[0]
+    arrive = float(tr.time[i_leave + inside[0]]) if leave is not None and inside.size else None
     settled = rest.converged and not off[-1] and damping > 0
     settle = float(tr.time[np.nonzero(off)[0][-1] + 1]) if settled and off.any() else None
     speed = np.abs(np.diff(np.r_[fold.tip_angle_deg, tip])) / dt
     direction = np.sign(rest.tip_angle_deg - fold.tip_angle_deg)
     overshoot = float(max(0.0, np.max(direction * (tip - rest.tip_angle_deg))))
-    return Snap(trajectory=tr, value=value, leave=leave, settle=settle,
+    return Snap(trajectory=tr, value=value, leave=leave, arrive=arrive, settle=settle,
                 duration=None if leave is None or settle is None else settle - leave,
                 rest_tip_deg=rest.tip_angle_deg, rest_stable=rest.stable,
                 peak_tip_speed=float(np.max(speed)), overshoot_deg=overshoot, band_deg=band)
