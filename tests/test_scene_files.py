@@ -413,3 +413,25 @@ def test_a_rail_at_any_angle_is_a_load_path(tmp_path):
     with pytest.raises(ParameterError, match="field.0.along"):
         load(path, ["field.0.position=[0.0, 1.5]", "field.0.rail=[0.0, -1.0]",
                     "field.0.along=0.8"])
+
+
+def test_cli_sweep_of_a_scene_file_snaps_past_the_fold():
+    """The field rotating round the hard-magnetic cantilever (load 5), quasi-statically in
+    steps of 0.1 degrees: the rod snaps at the first step past the fold (212.1477 degrees,
+    refined by jr.scene_folds); at a finite rate it snaps later."""
+    file = load("hard-magnetic-cantilever")
+    key, factor = file.input_of("field.0.angle_deg")
+    fold = jr.scene_folds(file.scene, key, factor * 90.0, factor * 300.0, n=16)[0].value / factor
+    proc = _cli("sweep", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg", "--from",
+                "90", "--to", "300", "--step", "0.1", "--json")
+    assert proc.returncode == 0, proc.stderr
+    (snap,) = json.loads(proc.stdout)["switches"]
+    assert fold < snap <= fold + 0.1 + 1e-9
+    proc = _cli("sweep", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg", "--from",
+                "90", "--to", "240", "--rate", "5", "--damping", "2", "--json")
+    assert proc.returncode == 0, proc.stderr
+    (late,) = json.loads(proc.stdout)["switches"]
+    assert fold < late < fold + 20.0  # 10.6 degrees late at this speed
+    proc = _cli("sweep", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg", "--from",
+                "90", "--to", "180", "--rate", "5", "--damping", "2", "--json")
+    assert proc.returncode == 0 and json.loads(proc.stdout)["switches"] == []  # no fold

@@ -165,16 +165,62 @@ def rate_sweep_command(args) -> int:
     return 0 if s.trajectory.converged else 1
 
 
+def sweep_on_file(args) -> int:
+    """``jaxrod sweep RIG --vary KEY --from A --to B [--step S | --rate R --damping C]``:
+    the input moved from A to B (the file's units) from the equilibrium reached by ramping
+    the loads at A: quasi-statically in steps (snaps by energy descent), or at a finite
+    rate (the motion); the values where the rod snapped, in order."""
+    import numpy as np
+
+    import jaxrod as jr
+    from jaxrod.dynamics.rate_sweep import rate_sweep
+    from jaxrod.scenes.files import load
+
+    if args.vary is None or args.start_deg is None or args.stop_deg is None:
+        raise ParameterError("vary: give --vary KEY --from A --to B with a scene file")
+    file = load(args.rig, args.set)
+    key, factor = file.input_of(args.vary)
+    a, b = args.start_deg, args.stop_deg
+    if a == b:
+        raise ParameterError(f"to: must differ from --from ({a:g})")
+    at = file.scene.replace(key, factor * a)
+    start = jr.equilibrium(at, n=args.n or 16, throw=False)
+    if args.rate is None:
+        step = args.step or abs(b - a) / 200.0
+        values = np.linspace(a, b, max(2, int(round(abs(b - a) / step)) + 1))
+        s = jr.scene_sweep(file.scene, key, (factor * values).tolist(), n=args.n or 16,
+                           state=start.state, progress=not args.quiet)
+        switches = [snap["value"] / factor for snap in s.snaps]
+        converged = s.converged
+    else:
+        if not (math.isfinite(args.rate) and args.rate > 0):
+            raise ParameterError(f"rate must be a finite number > 0, got {args.rate!r}")
+        s = rate_sweep(at, key, start.state, factor * b, factor * args.rate, args.damping,
+                       dt=args.dt, n=args.n or 16)
+        switches = [v / factor for v in s.switches]
+        converged = s.trajectory.converged
+    out = {"rig": args.rig, "vary": args.vary, "from": a, "to": b, "rate": args.rate,
+           "switches": switches, "converged": converged}
+    print(json.dumps(out) if args.json else
+          f"{args.rig}: {args.vary} from {a:g} to {b:g}"
+          + (f" at {args.rate:g} per unit time" if args.rate else " (quasi-static)")
+          + ": snapped at " + (", ".join(f"{v:.8g}" for v in switches) or "no value"))
+    return 0 if converged else 1
+
+
 def add_rate_sweep_options(w) -> None:
+    add_scene_file_inputs(w, vary=False)
+    w.add_argument("--vary", metavar="KEY", help="scene file: the input to sweep")
     w.add_argument("--rate", type=_float("rate"), default=None,
                    help="a sweep at a finite rate: the magnet's speed, deg per unit time "
                    "(time in L^2 sqrt(rho A_c / (E I)))")
     w.add_argument("--damping", type=_float("damping"), default=1.0,
                    help="with --rate: the drag per unit length (sqrt(rho A_c E I) / L^2)")
     w.add_argument("--from", dest="start_deg", type=_float("from"), default=None,
-                   help="with --rate: the magnet's first angle, deg")
+                   help="with --rate: the magnet's first angle, deg (scene file: the "
+                   "input's first value)")
     w.add_argument("--to", dest="stop_deg", type=_float("to"), default=None,
-                   help="with --rate: its last angle, deg")
+                   help="with --rate: its last angle, deg (scene file: the last value)")
     w.add_argument("--dt", type=_float("dt"), default=0.05, help="with --rate: time step")
 
 

@@ -166,10 +166,11 @@ def cmd_sweep(args) -> int:
     from jaxrod.plotting import hysteresis_figure
     from jaxrod.progress import Interrupted, progress_bar
 
-    if args.rate is not None:
-        from jaxrod.cli.dynamics import rate_sweep_command
+    if args.rig is not None or args.rate is not None:
+        from jaxrod.cli.dynamics import rate_sweep_command, sweep_on_file
 
-        return rate_sweep_command(args)
+        return sweep_on_file(args) if args.rig is not None else rate_sweep_command(args)
+    uses_scene_file(args)  # --set or --vary without a scene file is an error
     if args.out is None:
         raise ParameterError("out: give --out DIR (sweep.csv, sweep.png, sweep.json)")
     scene, info = _magnet_scene_from_args(args)

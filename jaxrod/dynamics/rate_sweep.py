@@ -7,8 +7,9 @@ Physics 2017; Liu, Gomez and Vella, JMPS 2021): swept at rate eps, the switch la
 by an amount that scales as eps^(2/3) where damping dominates and as eps^(4/5) where
 inertia does (tests/test_dynamics.py measures both exponents). A switch is a snap of the
 tip: a run of steps where the tip's direction moves faster than ``threshold`` times the
-fastest it moves in the whole sweep (runs closer than ``merge`` time units are one snap and
-its ringing); its value is where the tip is fastest in the first run.
+fastest it moves in the whole sweep and ten times its median speed (the rod following the
+input), runs closer than ``merge`` time units being one snap and its ringing; its value is
+where the tip is fastest in the first run.
 """
 
 from __future__ import annotations
@@ -43,7 +44,8 @@ class RateSweep:
 def switches(time, values, tip_deg, threshold: float = 0.25, merge: float = 20.0) -> list:
     """The input's values where the tip snapped (module docstring)."""
     speed = np.abs(np.diff(np.r_[tip_deg[0], tip_deg])) / np.gradient(time)
-    fast = speed > threshold * np.max(speed)
+    # a snap is fast against the sweep's own following motion (its median speed) too
+    fast = speed > max(threshold * np.max(speed), 10.0 * np.median(speed))
     edges = np.diff(np.r_[0, fast.astype(int), 0])
     starts, ends = np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]
     out, last_end = [], None

@@ -18,7 +18,9 @@ A file in SI units (the default) or, with ``units = "nondimensional"``, in the g
                      position = [x, z] with moment_direction = [ux, uz] (on a straight rail
                      from there: rail = [ux, uz], along = t), or on the paper's circle:
                      path = "circle", radius (the paper's D), angle_deg (alpha; the moment
-                     radially outward)
+                     radially outward), or on any curve: path = "curve", coefficients =
+                     [[x0, z0], [x1, z1], ...] (c(t) = a0 + a1 t + ...), t,
+                     moment_along_path = true or moment_direction
     [gravity]        g (m/s^2, along -z: the rod standing up) or G (rho g A_c L^3 / (E I))
 
 and top-level ``geometry = "planar"`` (default) or ``"3d"``. The terms of the scene are
@@ -45,6 +47,7 @@ from jaxrod.scenes.terms import (
     Bending,
     Dipole,
     Gravity,
+    PathDipole,
     PointDipole,
     ProgrammedMagnetisation,
     Zeeman,
@@ -62,9 +65,11 @@ FIELD_KEYS = {
     "uniform": {"si": ("kind", "B", "angle_deg"),
                 "nondimensional": ("kind", "load", "A", "angle_deg")},
     "dipole": {"si": ("kind", "moment", "remanence", "diameter", "position",
-                      "moment_direction", "path", "radius", "angle_deg", "rail", "along"),
+                      "moment_direction", "path", "radius", "angle_deg", "rail", "along",
+                      "coefficients", "t", "moment_along_path"),
                "nondimensional": ("kind", "M", "position", "moment_direction", "path",
-                                  "radius", "angle_deg", "rail", "along")},
+                                  "radius", "angle_deg", "rail", "along", "coefficients", "t",
+                                  "moment_along_path")},
 }
 TOP = ("units", "geometry", "rod", "magnetisation", "field", "gravity")
 
@@ -329,8 +334,13 @@ def scene_from(data: dict) -> FileScene:
             inputs[f"{where}radius"] = (f"{name}.D", 1.0 / L)
             inputs[f"{where}angle_deg"] = (f"{name}.alpha", math.pi / 180.0)
             continue
+        if field.get("path") == "curve":
+            terms[name] = _curve_dipole(field, where, M, L, half)
+            inputs[f"{where}t"] = (f"{name}.t", 1.0)
+            continue
         if "path" in field:
-            _fail(f"{where}path", f"must be \"circle\" (or omitted), got {field['path']!r}")
+            _fail(f"{where}path", f"must be \"circle\" or \"curve\" (or omitted), got "
+                                  f"{field['path']!r}")
         for key in ("radius", "angle_deg"):
             if key in field:
                 _fail(f"{where}{key}", "belongs to path = \"circle\"; a free magnet takes "
@@ -356,6 +366,34 @@ def scene_from(data: dict) -> FileScene:
         inputs[f"{where}along"] = (f"{name}.along", 1.0 / L)
     scene = Scene(terms, geometry=geometry, support=support)
     return FileScene(scene, inputs, L, data)
+
+
+def _curve_dipole(field: dict, where: str, M, L, half):
+    """A magnet on a curve c(t) = sum_k a_k t^k: ``coefficients`` = [[x0, z0], [x1, z1],
+    ...] (the file's length unit), ``t`` (default 0), the moment along
+    ``moment_direction`` or, with ``moment_along_path = true``, along the curve."""
+    a = field.get("coefficients")
+    if not isinstance(a, list) or len(a) < 2 or not all(
+            isinstance(p, list) and len(p) == 2 and all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                for v in p) for p in a):
+        _fail(f"{where}coefficients", "must be a list of at least two [x, z] pairs (c(t) = "
+                                      f"a0 + a1 t + ...), got {a!r}")
+    for key in ("position", "rail", "along", "radius", "angle_deg"):
+        if key in field:
+            _fail(f"{where}{key}", "a magnet on a curve takes coefficients and t")
+    coefficients = np.array([[x, 0.0, z] for x, z in a]) / L
+    t = _number(field, "t", where, required=False, default=0.0)
+    along = field.get("moment_along_path", False)
+    if not isinstance(along, bool):
+        _fail(f"{where}moment_along_path", f"must be true or false, got {along!r}")
+    u = _vector(field, "moment_direction", where, [0.0, 1.0])
+    term = PathDipole(M, coefficients, t, np.array([u[0], 0.0, u[1]]), float(along))
+    c = np.asarray(term.centre())
+    if np.linalg.norm(c) <= 1.0 + half:
+        _fail(f"{where}t", f"the magnet ({np.linalg.norm(c):g} rod lengths from the clamp) is "
+                           "within the rod's reach")
+    return term
 
 
 def _profile(mag: dict, kind, geometry: str):

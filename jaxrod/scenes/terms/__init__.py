@@ -60,9 +60,10 @@ from jaxrod.scenes.terms.anisotropy import Anisotropy  # noqa: E402
 from jaxrod.scenes.terms.bending import Bending  # noqa: E402
 from jaxrod.scenes.terms.dipole import Dipole  # noqa: E402
 from jaxrod.scenes.terms.gravity import Gravity  # noqa: E402
+from jaxrod.scenes.terms.path_dipole import PathDipole  # noqa: E402
 from jaxrod.scenes.terms.point_dipole import PointDipole  # noqa: E402
 from jaxrod.scenes.terms.programmed import ProgrammedMagnetisation  # noqa: E402
 from jaxrod.scenes.terms.zeeman import Zeeman  # noqa: E402
 
-__all__ = ["TERMS", "term", "Anisotropy", "Bending", "Dipole", "Gravity", "PointDipole",
-           "ProgrammedMagnetisation", "Zeeman"]
+__all__ = ["TERMS", "term", "Anisotropy", "Bending", "Dipole", "Gravity", "PathDipole",
+           "PointDipole", "ProgrammedMagnetisation", "Zeeman"]
