@@ -248,6 +248,16 @@ def test_bad_scene_files_name_the_key(text, key, words, tmp_path):
     assert words in str(err.value)
 
 
+@pytest.mark.parametrize("text, key, words", BAD)
+def test_every_bad_scene_file_exits_2_with_one_line_naming_the_key(text, key, words,
+                                                                    tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text)
+    proc = _cli("equilibrium", str(bad))
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and key in lines[0], proc.stderr
+
+
 def test_bad_scene_files_exit_2_with_one_line(cantilever, tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(BAD[2][0])

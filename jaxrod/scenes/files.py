@@ -7,9 +7,9 @@ A file in SI units (the default) or, with ``units = "nondimensional"``, in the g
                      origin pointing along +z, or "pinned"), density (kg/m^3, with gravity)
     [magnetisation]  kind = "hard" (remanent, fixed in the material; remanence in A/m along
                      the tangent, or at angle_deg to it, or at a profile along s,
-                     profile_deg = [c0, c1, ...] degrees, c0 + c1 s + ...; uniform fields,
-                     planar rods) or "soft" (the paper's wire, saturated along the tangent
-                     with polarity +d3; saturation in A/m)
+                     profile_deg = [c0, c1, ...] degrees, c0 + c1 s + ...; uniform fields
+                     and magnets at a position; planar rods) or "soft" (the paper's wire,
+                     saturated along the tangent with polarity +d3; saturation in A/m)
     [[field]]        kind = "uniform": B (T) or load (A_c M_r B L^2 / (E I)), angle_deg
                      (from +z toward +x); a soft wire in a uniform field: A (the paper's
                      anisotropy group), angle_deg;
@@ -49,6 +49,7 @@ from jaxrod.scenes.terms import (
     Gravity,
     PathDipole,
     PointDipole,
+    ProgrammedDipole,
     ProgrammedMagnetisation,
     Zeeman,
 )
@@ -299,11 +300,11 @@ def scene_from(data: dict) -> FileScene:
                     inputs["magnetisation.angle_deg"] = (f"{name}.profile.0", math.pi / 180.0)
             inputs[f"{where}angle_deg"] = (f"{name}.angle", math.pi / 180.0)
             continue
-        if profile is not None:
+        if profile is not None and field.get("path") in ("circle", "curve"):
             _fail("magnetisation.angle_deg" if "angle_deg" in mag else
                   "magnetisation.profile_deg", "a magnetisation at an angle to the tangent "
-                  "acts in uniform fields only (in a magnet's field it is a distributed term "
-                  "of the positions, not written yet)")
+                  "acts in uniform fields and the fields of magnets at a position (not on a "
+                  "circle or a curve)")
         # a dipole
         if si:
             if "moment" in field:
@@ -360,9 +361,15 @@ def scene_from(data: dict) -> FileScene:
         if np.linalg.norm(c + along * rail) <= 1.0 + half:
             _fail(where_c, f"the magnet ({np.linalg.norm(c + along * rail):g} rod lengths from "
                            "the clamp) is within the rod's reach")
-        terms[name] = PointDipole(M, c, np.array([u[0], 0.0, u[1]]), rail, along)
         inputs[f"{where}position.0"] = (f"{name}.position.0", 1.0 / L)
         inputs[f"{where}position.1"] = (f"{name}.position.2", 1.0 / L)
+        if profile is not None:  # a distributed term of the positions
+            if "along" in field or "rail" in field:
+                _fail(f"{where}rail", "a programmed magnetisation takes a magnet at a "
+                                      "position (no rail)")
+            terms[name] = ProgrammedDipole(M, c, np.array([u[0], 0.0, u[1]]), profile)
+            continue
+        terms[name] = PointDipole(M, c, np.array([u[0], 0.0, u[1]]), rail, along)
         inputs[f"{where}along"] = (f"{name}.along", 1.0 / L)
     scene = Scene(terms, geometry=geometry, support=support)
     return FileScene(scene, inputs, L, data)

@@ -63,7 +63,8 @@ from jaxrod.scenes.terms.gravity import Gravity  # noqa: E402
 from jaxrod.scenes.terms.path_dipole import PathDipole  # noqa: E402
 from jaxrod.scenes.terms.point_dipole import PointDipole  # noqa: E402
 from jaxrod.scenes.terms.programmed import ProgrammedMagnetisation  # noqa: E402
+from jaxrod.scenes.terms.programmed_dipole import ProgrammedDipole  # noqa: E402
 from jaxrod.scenes.terms.zeeman import Zeeman  # noqa: E402
 
 __all__ = ["TERMS", "term", "Anisotropy", "Bending", "Dipole", "Gravity", "PathDipole",
-           "PointDipole", "ProgrammedMagnetisation", "Zeeman"]
+           "PointDipole", "ProgrammedDipole", "ProgrammedMagnetisation", "Zeeman"]
