@@ -106,6 +106,25 @@ def test_a_distributed_term_equals_its_endpoint_form():
         assert np.max(np.abs(a - b)) <= 1e-12 * (1 + np.max(np.abs(a))), name
 
 
+def assert_planar_forms_equal_director_forms(planar: Scene) -> None:
+    """The planar scene's energy, gradient and Hessian at a state equal those of the same
+    terms on the 3D rod at v2 = 0 (the v1 block)."""
+    director = Scene(planar.terms, geometry="3d")
+    disc, d3 = planar_discretisation(N), director_discretisation(N)
+    x = _state(disc.size)
+    y = d3.from_planar(x)
+    m = disc.size
+    e1 = _call(FIXED, "energy", x, 0.0, (planar, disc))
+    e3 = _call(FIXED, "energy", y, 0.0, (director, d3))
+    assert abs(e1 - e3) <= 1e-13 * abs(e3)
+    g1, g3 = (_call(FIXED, "gradient", x, 0.0, (planar, disc)),
+              _call(FIXED, "gradient", y, 0.0, (director, d3))[:m])
+    assert np.max(np.abs(g1 - g3)) <= 1e-12 * (1 + np.max(np.abs(g3)))
+    h1, h3 = (_call(FIXED, "hessian", x, 0.0, (planar, disc)),
+              _call(FIXED, "hessian", y, 0.0, (director, d3))[:m, :m])
+    assert np.max(np.abs(h1 - h3)) <= 1e-11 * (1 + np.max(np.abs(h3)))
+
+
 def test_the_planar_forms_agree_with_the_director_forms():
     """On the planar rod the terms use their forms in theta (smaller programs); on the 3D rod
     at v2 = 0 the director forms give the same energy, gradient and Hessian (v1 block)."""
@@ -115,20 +134,7 @@ def test_the_planar_forms_agree_with_the_director_forms():
     for extra in ({}, terms):
         planar = paper_scene("planar", 0.4, 0.3, **extra).replace("gravity.direction.0", 0.6)
         planar = Scene({**planar.terms, "gravity": tilted})
-        director = Scene(planar.terms, geometry="3d")
-        disc, d3 = planar_discretisation(N), director_discretisation(N)
-        x = _state(disc.size)
-        y = d3.from_planar(x)
-        m = disc.size
-        e1 = _call(FIXED, "energy", x, 0.0, (planar, disc))
-        e3 = _call(FIXED, "energy", y, 0.0, (director, d3))
-        assert abs(e1 - e3) <= 1e-13 * abs(e3)
-        g1, g3 = (_call(FIXED, "gradient", x, 0.0, (planar, disc)),
-                  _call(FIXED, "gradient", y, 0.0, (director, d3))[:m])
-        assert np.max(np.abs(g1 - g3)) <= 1e-12 * (1 + np.max(np.abs(g3)))
-        h1, h3 = (_call(FIXED, "hessian", x, 0.0, (planar, disc)),
-                  _call(FIXED, "hessian", y, 0.0, (director, d3))[:m, :m])
-        assert np.max(np.abs(h1 - h3)) <= 1e-11 * (1 + np.max(np.abs(h3)))
+        assert_planar_forms_equal_director_forms(planar)
 
 
 def test_the_papers_scenes_are_their_printed_energies():

@@ -7,7 +7,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from test_engine import _call, _state, _whole
+from test_engine import _call, _state, _whole, assert_planar_forms_equal_director_forms
 
 import jaxrod as jr
 from jaxrod.derivatives import Structured
@@ -56,17 +56,7 @@ def test_assembled_derivatives_equal_autodiff(geometry):
 def test_planar_forms_equal_director_forms():
     terms = _terms("3d")
     terms["field"] = Zeeman(2.5, 1.1, 0.0)
-    planar, director = Scene(terms), Scene(terms, geometry="3d")
-    disc, d3 = planar_discretisation(N), director_discretisation(N)
-    x = _state(disc.size)
-    y = d3.from_planar(x)
-    m = disc.size
-    e1 = _call(FIXED, "energy", x, 0.0, (planar, disc))
-    e3 = _call(FIXED, "energy", y, 0.0, (director, d3))
-    assert abs(e1 - e3) <= 1e-13 * abs(e3)
-    g1 = _call(FIXED, "gradient", x, 0.0, (planar, disc))
-    g3 = _call(FIXED, "gradient", y, 0.0, (director, d3))[:m]
-    assert np.max(np.abs(g1 - g3)) <= 1e-12 * (1 + np.max(np.abs(g3)))
+    assert_planar_forms_equal_director_forms(Scene(terms))
 
 
 def test_the_programmed_magnetisation_at_a_constant_angle_is_a_rotated_field():
