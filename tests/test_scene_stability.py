@@ -46,9 +46,16 @@ def test_a_bent_hard_magnetic_cantilever_stays_in_its_plane():
     assert r.stable_out_of_plane and r.min_eig_plane > 0 and r.coupling <= 1e-12
 
 
-def test_planar_only_terms_are_refused():
-    from jaxrod.scenes.terms import ProgrammedMagnetisation
+@pytest.mark.parametrize("make", ["programmed", "programmed_dipole"])
+def test_planar_only_terms_are_refused(make):
+    """A programmed magnetisation has no 3D form: its out-of-plane check and any 3D scene
+    with it are refused, naming the term."""
+    from jaxrod.scenes.scene import SceneError
+    from jaxrod.scenes.terms import ProgrammedDipole, ProgrammedMagnetisation
 
-    scene = jr.Scene({"bending": jr.Bending(), "field": ProgrammedMagnetisation(1.0)})
+    t = ProgrammedMagnetisation(1.0) if make == "programmed" else ProgrammedDipole(0.1)
+    scene = jr.Scene({"bending": jr.Bending(), "field": t})
     with pytest.raises(ParameterError, match="no 3D form"):
         jr.out_of_plane_stability(scene, np.zeros(16), n=16)
+    with pytest.raises(SceneError, match="'field' has no 3D form"):
+        jr.Scene({"bending": jr.Bending(), "field": t}, geometry="3d")

@@ -21,29 +21,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from functools import lru_cache
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod import spectral
 from jaxrod.equilibria.equilibrium import DEFAULT_N, FIXED, discretise, equilibrium
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.scene import Scene
 
 
-@lru_cache(maxsize=16)
-def _cumulative(degree: int) -> np.ndarray:
-    return spectral.cumulative_integration_matrix(degree)
-
-
 def positions(scene: Scene, x, disc):
     """r(s_j) = int_0^{s_j} d3 at the quadrature nodes (rod lengths), (n_q, 3)."""
-    a = jnp.einsum("jrm,m->jr", disc.jet_matrix, x)
-    d3 = jax.vmap(lambda aj: scene._jet(aj)[0])(a)
-    return jnp.asarray(_cumulative(d3.shape[0] - 1)) @ d3
+    return scene.positions(x, disc)
 
 
 def mass_matrix(scene: Scene, x, disc):

@@ -172,8 +172,8 @@ def bifurcated_branch(scene: Scene, point: BranchPoint, stop: float, n: int = DE
     start, stop = check_range(scene, point.vary, point.value, stop)
     disc = discretise(scene, n)
     opts = branch_options()
-    lo, hi = (0.0, 1.0) if stop > start else (0.0, 1.0)
-    opts = opts._replace(lam_min=lo - 1.0, lam_max=hi, max_points=0)
+    # lam in [0, 1] spans the point's value to stop; the run may start on either side
+    opts = opts._replace(lam_min=-1.0, lam_max=1.0, max_points=0)
     phi = jnp.asarray(point.null_vector)
     run, observed, X, ok = jax.device_get(_bifurcated(
         scene, disc, start, stop - start, jnp.asarray(point.state), phi, side * amplitude,

@@ -67,9 +67,7 @@ def mean_functional(disc):
 
 def tip(scene: Scene, x, disc):
     """(tip angle from +z toward +x in radians, tip position X = int d3 (3-vector))."""
-    a = jnp.einsum("jrm,m->jr", disc.jet_matrix, x)
-    d3 = jax.vmap(lambda aj: scene._jet(aj)[0])(a)
-    X = d3.T @ disc.quad_weights
+    X = scene.directors(x, disc).T @ disc.quad_weights
     return jnp.arctan2(X[0], X[2]), X
 
 

@@ -65,9 +65,11 @@ class Scene:
             return  # rebuilt by a JAX transformation with placeholder leaves
         if self.geometry not in GEOMETRIES:
             raise SceneError(f"geometry must be one of {GEOMETRIES}, got {self.geometry!r}")
-        for name in self.terms:
+        for name, t in self.terms.items():
             if not isinstance(name, str) or not name.isidentifier():
                 raise SceneError(f"a term's name must be an identifier, got {name!r}")
+            if self.geometry == "3d" and getattr(t, "planar_only", False):
+                raise SceneError(f"the term {name!r} has no 3D form (planar rods only)")
 
     # -- the structure that jaxrod.derivatives.Structured assembles --------------------------
 
@@ -118,14 +120,23 @@ class Scene:
     def has_distributed(self) -> bool:
         return bool(self._of_kind("distributed"))
 
+    def directors(self, x, disc):
+        """d3 at the quadrature nodes of the state x, (n_q, 3)."""
+        a = jnp.einsum("jrm,m->jr", disc.jet_matrix, x)
+        return jax.vmap(lambda aj: self._jet(aj)[0])(a)
+
+    def positions(self, x, disc, d3=None):
+        """r(s_j) = int_0^{s_j} d3 at the quadrature nodes (rod lengths), (n_q, 3)."""
+        d3 = self.directors(x, disc) if d3 is None else d3
+        return jnp.asarray(_cumulative(d3.shape[0] - 1)) @ d3
+
     def distributed_energy(self, x, disc):
         """Sum of the distributed terms at the state x (0 without them)."""
         terms = self._of_kind("distributed")
         if not terms:
             return jnp.zeros((), x.dtype)
-        a = jnp.einsum("jrm,m->jr", disc.jet_matrix, x)
-        d3 = jax.vmap(lambda aj: self._jet(aj)[0])(a)
-        r = jnp.asarray(_cumulative(d3.shape[0] - 1)) @ d3
+        d3 = self.directors(x, disc)
+        r = self.positions(x, disc, d3)
         s, w = disc.quad_nodes, disc.quad_weights
         return sum(self._scale(t) * t.distributed(r, d3, s, w) for t in terms)
 

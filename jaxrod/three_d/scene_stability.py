@@ -68,8 +68,7 @@ def out_of_plane_stability(scene: Scene, state, n: int = DEFAULT_N) -> OutOfPlan
     planar ``scene`` (module docstring)."""
     if scene.geometry != "planar":
         raise ParameterError("scene: give the planar scene whose equilibrium this is")
-    planar_only = [name for name, t in scene.terms.items()
-                   if t.density is not None and getattr(t, "planar_only", False)]
+    planar_only = [name for name, t in scene.terms.items() if getattr(t, "planar_only", False)]
     if planar_only:
         raise ParameterError(f"scene: the term {planar_only[0]!r} has no 3D form")
     disc = discretise(scene, n)
