@@ -8,7 +8,7 @@ from pathlib import Path
 
 from jaxrod.cli._inputs import _entry, _float, _magnet_scene_from_args, _source, add_magnet_inputs
 from jaxrod.cli._output import _header, _not_converged, _output_dir
-from jaxrod.cli.dynamics import add_rate_sweep_options
+from jaxrod.cli.rate_sweep import add_rate_sweep_options
 from jaxrod.cli.scene_file import (
     add_scene_file_inputs,
     branch_on_file,
@@ -167,7 +167,7 @@ def cmd_sweep(args) -> int:
     from jaxrod.progress import Interrupted, progress_bar
 
     if args.rig is not None or args.rate is not None:
-        from jaxrod.cli.dynamics import rate_sweep_command, sweep_on_file
+        from jaxrod.cli.rate_sweep import rate_sweep_command, sweep_on_file
 
         return sweep_on_file(args) if args.rig is not None else rate_sweep_command(args)
     uses_scene_file(args)  # --set or --vary without a scene file is an error

@@ -100,36 +100,54 @@ def _kinetic(scene, disc, q, v):
     return 0.5 * jnp.sum(disc.quad_weights[:, None] * rdot**2)
 
 
+def bdf_coefficients(ratio):
+    """(a1, a2, b) of variable-step BDF2, y1 - a1 y0 + a2 y_-1 = b h f(y1), for the step
+    ratio omega = h / h_prev (omega = 1: 4/3, 1/3, 2/3; omega = 0: backward Euler)."""
+    d = 1.0 + 2.0 * ratio
+    return (1.0 + ratio) ** 2 / d, ratio**2 / d, (1.0 + ratio) / d
+
+
 def _bdf_residual(q1, args):
     """BDF2 on Lagrange's equations d/dt (M v) - dT/dq + grad E + c M v = 0, p = M(q) v:
-    p1 - 4/3 p0 + 1/3 p_1 = 2h/3 [dT/dq(q1, v1) - grad E(q1) - c p1],
-    v1 = (3 q1 - 4 q0 + q_1) / (2h) (``first``: backward Euler from q0, p0)."""
-    q0, qm, p0, pm, h, c, first, scene1, disc = args
-    v1 = jnp.where(first, (q1 - q0) / h, (3.0 * q1 - 4.0 * q0 + qm) / (2.0 * h))
+    p1 - a1 p0 + a2 p_-1 = b h [dT/dq(q1, v1) - grad E(q1) - c p1],
+    v1 = (q1 - a1 q0 + a2 q_-1) / (b h) (``bdf_coefficients``)."""
+    q0, qm, p0, pm, h, c, coef, scene1, disc = args
+    a1, a2, b = coef
+    v1 = (q1 - a1 * q0 + a2 * qm) / (b * h)
     p1 = jax.grad(lambda v: _kinetic(scene1, disc, q1, v))(v1)
     dTdq = jax.grad(lambda q: _kinetic(scene1, disc, q, v1))(q1)
     force = dTdq - FIXED.gradient(q1, 0.0, (scene1, disc)) - c * p1
-    return jnp.where(first, p1 - p0 - h * force,
-                     p1 - 4.0 / 3.0 * p0 + pm / 3.0 - 2.0 * h / 3.0 * force)
+    return p1 - a1 * p0 + a2 * pm - b * h * force
+
+
+def bdf_step(scene1, disc, q, qm, p, pm, h, ratio, c, guess):
+    """One BDF2 step to q1 (step ratio ``ratio``, 0 for backward Euler): the Newton result,
+    the velocity and momentum at q1."""
+    coef = bdf_coefficients(ratio)
+    res = newton(_bdf_residual, guess, (q, qm, p, pm, h, c, coef, scene1, disc), tol=1e-12)
+    a1, a2, b = coef
+    v1 = (res.x - a1 * q + a2 * qm) / (b * h)
+    return res, v1, jax.grad(lambda v: _kinetic(scene1, disc, res.x, v))(v1)
+
+
+def observe(scene1, disc, q1, v1):
+    """What a trajectory records at a step: kinetic and potential energy, the tip's
+    direction, rotation and position."""
+    angle, X = tip(scene1, q1, disc)
+    return (_kinetic(scene1, disc, q1, v1), FIXED.energy(q1, 0.0, (scene1, disc)), angle,
+            tip_tangent(scene1, q1, disc), X)
 
 
 def _run_bdf(scene, disc, q0, p0, h, steps, c, vary, start, rate):
     def step(carry, k):
         q, qm, p, pm = carry
-        t1 = (k + 1.0) * h
-        at = _scene_at(scene, vary, start, rate, t1)
+        at = _scene_at(scene, vary, start, rate, (k + 1.0) * h)
         first = k == 0
         guess = jnp.where(first, q, 2.0 * q - qm)
-        res = newton(_bdf_residual, guess, (q, qm, p, pm, h, c, first, at, disc), tol=1e-12)
-        q1 = res.x
-        v1 = jnp.where(first, (q1 - q) / h, (3.0 * q1 - 4.0 * q + qm) / (2.0 * h))
-        p1 = jax.grad(lambda v: _kinetic(at, disc, q1, v))(v1)
-        kinetic = _kinetic(at, disc, q1, v1)
-        potential = FIXED.energy(q1, 0.0, (at, disc))
-        angle, X = tip(at, q1, disc)
-        out = (q1, kinetic, potential, angle, tip_tangent(at, q1, disc), X, res.converged,
-               res.residual_norm)
-        return (q1, q, p1, p), out
+        res, v1, p1 = bdf_step(at, disc, q, qm, p, pm, h, jnp.where(first, 0.0, 1.0), c,
+                               guess)
+        out = (res.x, *observe(at, disc, res.x, v1), res.converged, res.residual_norm)
+        return (res.x, q, p1, p), out
 
     _, out = jax.lax.scan(step, (q0, q0, p0, p0), jnp.arange(steps))
     return out
@@ -170,7 +188,8 @@ class Trajectory:
 
 def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
              n: int = DEFAULT_N, velocity=None, vary: str | None = None,
-             rate: float = 0.0, scheme: str = "midpoint") -> Trajectory:
+             rate: float = 0.0, scheme: str = "midpoint", tol: float | None = None,
+             dt_max: float | None = None, max_steps: int = 20000) -> Trajectory:
     """The rod's motion from ``state`` (and ``velocity``, default at rest) until ``t_end``
     with steps ``dt`` (module docstring). ``damping``: the linear drag coefficient c >= 0.
     ``vary``/``rate``: an input moving at a constant rate from the scene's value (a magnet
@@ -178,7 +197,9 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
     energy of an undamped motion oscillates at O(dt^2) without drift; the modes that dt does
     not resolve are not damped and ring), or "bdf2" (BDF2 on Lagrange's equations,
     L-stable: those modes die out, the resolved motion is second order; for settling
-    times)."""
+    times). ``tol``: BDF2 with adaptive steps (``jaxrod.dynamics.adaptive``) at this local
+    accuracy, from the step ``dt``, no longer than ``dt_max``, at most ``max_steps`` kept
+    (``converged`` is False if they did not reach t_end)."""
     if scheme not in SCHEMES:
         raise ParameterError(f"scheme must be one of {', '.join(SCHEMES)}, got {scheme!r}")
     disc = discretise(scene, n)
@@ -201,6 +222,9 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
         from jaxrod.dynamics.modes import mass_matrix
 
         p0 = mass_matrix(scene, q0, disc) @ jnp.asarray(velocity, jnp.float64)
+    if tol is not None:
+        return _adaptive(scene, disc, q0, p0, t_end, dt, damping, vary, start, rate, scheme,
+                         tol, dt_max, max_steps)
     program = _program if scheme == "midpoint" else _program_bdf
     q, kin, pot, angle, tangent, X, conv, res = jax.device_get(program(
         scene, disc, q0, p0, float(dt), steps, float(damping), vary, start, float(rate)))
@@ -209,3 +233,27 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
                       tip_position=np.asarray(X), kinetic=np.asarray(kin),
                       potential=np.asarray(pot), converged=bool(np.all(conv)),
                       residual_norm=float(np.max(res)))
+
+
+def _adaptive(scene, disc, q0, p0, t_end, dt, damping, vary, start, rate, scheme, tol,
+              dt_max, max_steps):
+    from jaxrod.dynamics.adaptive import run_adaptive
+
+    if scheme != "bdf2":
+        raise ParameterError(f"tol: adaptive steps are BDF2's; scheme {scheme!r} has fixed "
+                             "steps")
+    dt_max = t_end if dt_max is None else dt_max
+    for name, v in (("tol", tol), ("dt_max", dt_max)):
+        if not (np.isfinite(v) and v > 0):
+            raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
+    if not (isinstance(max_steps, int) and max_steps >= 3):
+        raise ParameterError(f"max_steps must be an integer >= 3, got {max_steps!r}")
+    t, k, bufs = jax.device_get(run_adaptive(
+        scene, disc, q0, p0, float(t_end), float(dt), float(dt_max), float(tol), max_steps,
+        float(damping), vary, start, float(rate)))
+    time, q, kin, pot, angle, tangent, X, conv, res = (np.asarray(b)[:int(k)] for b in bufs)
+    reached = float(t) >= float(t_end) * (1.0 - 1e-12)
+    return Trajectory(time=time, states=q, tip_angle_deg=np.degrees(angle),
+                      tip_tangent_deg=np.degrees(tangent), tip_position=X, kinetic=kin,
+                      potential=pot, converged=bool(reached and np.all(conv)),
+                      residual_norm=float(np.max(res, initial=0.0)))

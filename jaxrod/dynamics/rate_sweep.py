@@ -1,15 +1,15 @@
 """Sweeps at a finite rate: the input moves at a constant speed and the rod follows
-dynamically (``jaxrod.dynamics.integrate``, BDF2 with drag), so it switches later than the
-static fold.
+dynamically (``jaxrod.dynamics.integrate``: BDF2 with drag, adaptive steps), so it switches
+later than the static fold.
 
-Near a fold the motion reduces to the fold's normal form (Gomez, Moulton and Vella, Nature
-Physics 2017; Liu, Gomez and Vella, JMPS 2021): swept at rate eps, the switch lags the fold
-by an amount that scales as eps^(2/3) where damping dominates and as eps^(4/5) where
-inertia does (tests/test_dynamics.py measures both exponents). A switch is a snap of the
-tip: a run of steps where the tip's direction moves faster than ``threshold`` times the
-fastest it moves in the whole sweep and ten times its median speed (the rod following the
-input), runs closer than ``merge`` time units being one snap and its ringing; its value is
-where the tip is fastest in the first run.
+Near a fold the motion reduces to the fold's normal form (``jaxrod.dynamics.normal_form``):
+swept at rate eps, the switch lags the fold by an amount that scales as eps^(2/3) where
+damping dominates and as eps^(4/5) where inertia does (tests/test_dynamics.py measures both
+and the prefactors). A switch is a snap of the tip: a run of steps where the tip's direction
+moves faster than ``threshold`` times the fastest it moves in the whole sweep and ten times
+its median speed before the first such step (the rod following the input), runs closer than
+``merge`` time units being one snap and its ringing; its value is where the tip is fastest
+in the first run.
 """
 
 from __future__ import annotations
@@ -43,9 +43,13 @@ class RateSweep:
 
 def switches(time, values, tip_deg, threshold: float = 0.25, merge: float = 20.0) -> list:
     """The input's values where the tip snapped (module docstring)."""
-    speed = np.abs(np.diff(np.r_[tip_deg[0], tip_deg])) / np.gradient(time)
-    # a snap is fast against the sweep's own following motion (its median speed) too
-    fast = speed > max(threshold * np.max(speed), 10.0 * np.median(speed))
+    speed = np.abs(np.diff(np.r_[tip_deg[0], tip_deg])) / np.diff(np.r_[0.0, time])
+    fast = speed > threshold * np.max(speed)
+    # a snap is fast against the sweep's own following motion too: the median speed before
+    # the first fast step (an undamped rod rings on after it)
+    first = int(np.argmax(fast))
+    following = np.median(speed[:first] if first >= 10 else speed)
+    fast &= speed > 10.0 * following
     edges = np.diff(np.r_[0, fast.astype(int), 0])
     starts, ends = np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]
     out, last_end = [], None
@@ -57,10 +61,12 @@ def switches(time, values, tip_deg, threshold: float = 0.25, merge: float = 20.0
 
 
 def rate_sweep(scene: Scene, vary: str, state, stop: float, rate: float, damping: float,
-               dt: float = 0.05, n: int = DEFAULT_N) -> RateSweep:
+               dt: float = 0.05, n: int = DEFAULT_N, tol: float | None = 1e-6,
+               max_steps: int = 20000, velocity=None) -> RateSweep:
     """Move ``vary`` from the scene's value to ``stop`` at ``rate`` (its units per unit
-    time; the sign is taken from the direction) from the equilibrium ``state`` at rest, with
-    drag ``damping``; steps ``dt`` (module docstring)."""
+    time; the sign is taken from the direction) from the equilibrium ``state`` at rest (or
+    with ``velocity``), with drag ``damping``; adaptive steps at the accuracy ``tol`` no
+    longer than ``dt`` (``tol=None``: fixed steps ``dt``) (module docstring)."""
     scene.check_key(vary)
     start = float(np.asarray(scene.value(vary)))
     if not (np.isfinite(rate) and rate != 0.0):
@@ -69,7 +75,8 @@ def rate_sweep(scene: Scene, vary: str, state, stop: float, rate: float, damping
         raise ParameterError(f"the sweep's end must differ from its start ({start:g})")
     speed = abs(rate) * np.sign(stop - start)
     t_end = (stop - start) / speed
-    tr = simulate(scene, state, t_end, dt, damping=damping, n=n, vary=vary, rate=speed,
-                  scheme="bdf2")
+    tr = simulate(scene, state, t_end, min(dt, 1e-3) if tol else dt, damping=damping, n=n,
+                  vary=vary, rate=speed, scheme="bdf2", tol=tol, dt_max=dt,
+                  max_steps=max_steps, velocity=velocity)
     values = start + speed * tr.time
     return RateSweep(vary, values, switches(tr.time, values, tr.tip_angle_deg), tr)
