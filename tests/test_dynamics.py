@@ -221,3 +221,45 @@ def test_cli_snap_of_the_papers_wire_in_seconds():
     assert air["duration_s"] > air["transit_s"] > 0 and vacuum["duration_s"] is None
     assert vacuum["transit_s"] < air["transit_s"]
     assert abs(air["rest_tip_deg"] - vacuum["rest_tip_deg"]) < 1e-6
+
+
+def test_the_snap_duration_is_differentiable_in_youngs_modulus():
+    """d(duration in seconds)/dE for the paper's wire snapping in air: the groups G and M
+    go as 1 / E, the time unit and the nondimensional drag (fixed in N s / m^2) as E^-1/2;
+    forward mode through the fold's implicit derivative and the BDF2 steps
+    (``duration_of``) against central differences (a batch under vmap), to 1e-6."""
+    import jax
+    import jax.numpy as jnp
+
+    from jaxrod.dynamics.drag import time_scale
+    from jaxrod.dynamics.snap import duration_of, snap
+    from jaxrod.params import NDFEB_MAGNET, preset
+
+    rod, _ = preset("permanent-magnet")
+    E0, rho = rod.material.youngs_modulus, rod.material.density
+    T0 = time_scale(rod.length, rod.diameter / 2, E0, rho)
+    G0, M0, D = rod.G, rod.M(NDFEB_MAGNET), rod.D(NDFEB_MAGNET)
+    c0 = 1.1  # the drag in air at the snap's speed, nondimensional at E0
+
+    def scene(r):
+        return jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(G0 * r),
+                         "magnet": jr.Dipole(M0 * r, D, 0.0)})
+
+    fold = max(jr.scene_folds(scene(1.0), "magnet.alpha", 0.0, math.pi / 2),
+               key=lambda f: f.value)
+
+    def seconds(e):  # e = E / E0
+        r = 1.0 / e
+        d, ok = duration_of(scene(r), fold, c0 * jnp.sqrt(r), t_end=30.0, dt=0.02)
+        return T0 * jnp.sqrt(r) * d, ok
+
+    value, ok = jax.jit(seconds)(1.0)
+    assert ok
+    by_snap = snap(scene(1.0), fold, c0, t_end=30.0, dt=0.02).duration * T0
+    assert abs(value - by_snap) < 2 * 0.02 * T0  # the same duration, to its steps
+    derivative = jax.jit(lambda e: jax.jvp(lambda x: seconds(x)[0], (e,), (1.0,))[1])(1.0)
+    h = 1e-4  # the three moduli as one batch, under vmap
+    batch, oks = jax.jit(jax.vmap(seconds))(jnp.array([1.0, 1.0 + h, 1.0 - h]))
+    assert np.all(oks) and float(batch[0]) == pytest.approx(float(value), rel=1e-12)
+    central = (batch[1] - batch[2]) / (2 * h)
+    assert float(derivative) == pytest.approx(float(central), rel=1e-6)  # per E0

@@ -15,6 +15,14 @@ The resting state is the last state polished by Newton (a static equilibrium), w
 stability; without enough damping to settle by t_end, it is where the same start comes to
 rest with the drag raised to 2. Near the fold the rod leaves slowly (the normal form's
 bottleneck), so ``leave`` depends on ``past``; the duration hardly does.
+
+``duration_of`` is the same duration as a JAX function of the scene (its inputs traced):
+the fold re-solved by Moore-Spence and differentiated implicitly, the motion by fixed-step
+BDF2 in a ``lax.scan``, ``leave`` and ``settle`` interpolated linearly between the steps
+where the tip crosses the band, the resting direction the last step's. Its forward-mode
+derivative (``jax.jvp``, ``jax.jacfwd``) in any input, the Young's modulus through the
+groups and the time unit, is exact for the discrete duration (tests/test_dynamics.py: against
+central differences).
 """
 
 from __future__ import annotations
@@ -22,13 +30,16 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.dynamics.integrate import Trajectory, simulate
-from jaxrod.equilibria.equilibrium import DEFAULT_N, equilibrium
+from jaxrod.derivatives import Structured
+from jaxrod.dynamics.integrate import Trajectory, _run_bdf, simulate
+from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, equilibrium, tip
 from jaxrod.equilibria.folds import Fold
 from jaxrod.params import ParameterError
-from jaxrod.scenes.scene import Scene
+from jaxrod.scenes.scene import Input, Scene
+from jaxrod.solvers.folds import differentiable_fold
 
 
 @dataclasses.dataclass(frozen=True)
@@ -97,3 +108,37 @@ def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: floa
                 duration=None if leave is None or settle is None else settle - leave,
                 rest_tip_deg=rest.tip_angle_deg, rest_stable=rest.stable,
                 peak_tip_speed=float(np.max(speed)), overshoot_deg=overshoot, band_deg=band)
+
+
+def _crossing(time, d, i):
+    """The time where d (|tip - reference| - band) crosses zero between steps i and i + 1
+    (linear interpolation)."""
+    return time[i] + (time[i + 1] - time[i]) * d[i] / (d[i] - d[i + 1])
+
+
+def duration_of(scene: Scene, fold: Fold, damping, t_end: float = 60.0, dt: float = 0.01,
+                past: float = 1e-3, band: float = 0.5, n: int = DEFAULT_N):
+    """The snap's duration (``snap``'s definition; module docstring) as a traceable function
+    of ``scene``'s inputs and ``damping``: ``fold`` (of ``scene`` at its given inputs) is the
+    start of the fold's Newton solve at the traced ones. Returns (duration, converged)."""
+    disc = discretise(scene, n)
+    m = disc.size
+    side = -1.0 if fold.normal_form_c > 0 else 1.0
+    steps = int(np.ceil(t_end / dt - 1e-9))
+    z, stats = differentiable_fold(Structured(Input(fold.vary)), jnp.asarray(fold.state), 0.0,
+                                   jnp.asarray(fold.null_vector),
+                                   (scene, disc, fold.value, 1.0))
+    x, value = z[:m], fold.value + z[-1]
+    at = scene.replace(fold.vary, value + side * past)
+    start = jnp.degrees(tip(scene.replace(fold.vary, value), x, disc)[0])
+    out = _run_bdf(at, disc, x, jnp.zeros(m), dt, steps, damping, None, 0.0, 0.0)
+    angle, converged = jnp.degrees(out[3]), out[-2]
+    time = dt * jnp.arange(0, steps + 1)
+    angle = jnp.concatenate([start[None], angle])
+    away = jnp.abs(angle - start) - band
+    i_leave = jnp.argmax(away > 0) - 1
+    off = jnp.abs(angle - angle[-1]) - band
+    i_settle = steps - jnp.argmax(off[::-1] > 0)
+    duration = _crossing(time, off, i_settle) - _crossing(time, away, i_leave)
+    ok = (stats[0] == 1.0) & jnp.all(converged) & jnp.any(away > 0) & (i_settle < steps - 1)
+    return duration, ok
