@@ -83,6 +83,31 @@ def test_a_damped_mode_decays_as_the_damped_oscillator(scheme):
     assert 3.3 < errors[0] / errors[1] < 5.0 and 3.3 < errors[1] / errors[2] < 5.0
 
 
+@pytest.mark.parametrize("scheme", ["midpoint", "bdf2"])
+def test_kelvin_voigt_damps_a_mode_as_its_frequency_squared(scheme):
+    """The first mode released with internal (Kelvin-Voigt) damping eta on the unloaded
+    cantilever, whose Hessian is the dissipation's form K: x'' + eta omega^2 x' + omega^2 x
+    = 0, damping ratio eta omega / 2 (``Modes.damping_ratios``); both schemes to second
+    order."""
+    m = modes(CANTILEVER, n=12)
+    eta, w1 = 0.05, m.omega[0]
+    c = eta * w1**2
+    assert m.damping_ratios(0.0, eta)[:3] == pytest.approx(eta * m.omega[:3] / 2, rel=1e-9)
+    wd = math.sqrt(w1**2 - c**2 / 4)
+    q0 = 1e-4 * m.shapes[:, 0] / np.max(np.abs(m.shapes[:, 0]))
+    x0 = simulate(CANTILEVER, q0, 1e-9, 1e-9, n=12).tip_position[0, 0]
+    t_end = 2 * math.pi / wd
+    exact = x0 * math.exp(-c * t_end / 2) * (math.cos(wd * t_end)
+                                             + c / (2 * wd) * math.sin(wd * t_end))
+    errors = []
+    for div in (80, 160, 320):
+        tr = simulate(CANTILEVER, q0, t_end, t_end / div, kelvin_voigt=eta, n=12,
+                      scheme=scheme)
+        errors.append(abs(tr.tip_position[-1, 0] - exact) / abs(x0))
+    assert errors[-1] < 1e-4
+    assert 3.3 < errors[0] / errors[1] < 5.0 and 3.3 < errors[1] / errors[2] < 5.0
+
+
 def test_the_snap_past_the_papers_upper_fold_lands_where_the_sweep_does():
     """The magnet moved 0.05 degrees past the upper fold: from the fold state the rod snaps
     (damped) and comes to rest on the disengaged state, the one the quasi-static sweep's
@@ -110,25 +135,32 @@ def test_bad_requests(kw, match):
         simulate(HARD, **args)
 
 
-def test_cli_snap_json():
+def test_cli_snap_json(tmp_path):
     """jaxrod snap from the paper's upper fold: the time series and a duration; the rod comes
-    to rest on the disengaged state (stable), having lost energy to the drag."""
+    to rest on the disengaged state (stable), having lost energy to the drag; the same
+    series as CSV, a figure and an animation of the rod."""
+    import csv
     import json
     import os
     import subprocess
     import sys
 
+    files = {k: tmp_path / f"snap.{k}" for k in ("csv", "png", "gif")}
     proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "snap", "--G", "2.2", "--M",
                            "0.0236", "--D", "1.2228", "--fold", "upper", "--damping", "1",
-                           "--json"], capture_output=True, text=True, timeout=600,
-                          env={**os.environ, "JAXROD_NO_CACHE": "1"})
+                           "--json", "--csv", str(files["csv"]), "--plot", str(files["png"]),
+                           "--animate", str(files["gif"])], capture_output=True, text=True,
+                          timeout=600, env={**os.environ, "JAXROD_NO_CACHE": "1"})
     assert proc.returncode == 0, proc.stderr
+    rows = list(csv.DictReader(open(files["csv"])))
+    assert files["png"].stat().st_size > 0 and files["gif"].read_bytes()[:3] == b"GIF"
     out = json.loads(proc.stdout)
     assert {"duration", "time", "tip_angle_deg", "energy", "kinetic"} <= set(out)
     assert out["duration"] > 0 and out["rest_stable"]
     assert out["rest_tip_deg"] < out["tip_angle_deg"][0] - 10.0  # it let go
     assert out["energy"][-1] < out["energy"][0]
-    assert len(out["time"]) == len(out["tip_angle_deg"]) == len(out["kinetic"])
+    assert len(out["time"]) == len(out["tip_angle_deg"]) == len(out["kinetic"]) == len(rows)
+    assert float(rows[-1]["tip_angle_deg"]) == pytest.approx(out["tip_angle_deg"][-1])
 
 
 @pytest.mark.parametrize("damping, exponent", [(10.0, 2.0 / 3.0), (0.0, 0.8)])
@@ -263,3 +295,27 @@ def test_the_snap_duration_is_differentiable_in_youngs_modulus():
     assert np.all(oks) and float(batch[0]) == pytest.approx(float(value), rel=1e-12)
     central = (batch[1] - batch[2]) / (2 * h)
     assert float(derivative) == pytest.approx(float(central), rel=1e-6)  # per E0
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["snap", "--G", "2.2", "--M", "0.0236", "--D", "1.2228", "--damping", "-1"], "damping"),
+    (["snap", "--G", "2.2", "--M", "0.0236", "--D", "1.2228", "--kelvin-voigt", "-0.1"],
+     "kelvin-voigt"),
+    (["sweep", "--G", "2.2", "--M", "0.0236", "--D", "1.2228", "--rate", "0", "--from", "38",
+      "--to", "41"], "rate"),
+    (["sweep", "--G", "2.2", "--M", "0.0236", "--D", "1.2228", "--rate", "nan", "--from",
+      "38", "--to", "41"], "rate"),
+    (["modes", "hard-magnetic-cantilever", "--set", "rod.density=0"], "rod.density"),
+    (["snap", "--G", "2.2", "--M", "0.001", "--D", "1.2228"], "no two folds"),
+])
+def test_bad_dynamics_input_is_one_line_and_exit_2(argv, says, capsys):
+    """Negative damping, zero density, a rate of zero or NaN, a fold that these inputs do not
+    have: one line naming it, exit 2."""
+    from jaxrod.cli import main
+
+    try:
+        code = main(argv)
+    except SystemExit as e:  # refused by the argument parser
+        code = e.code
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and says in err and len(err.splitlines()) == 1, err

@@ -23,11 +23,12 @@ import sys
 from jaxrod.cli._inputs import BATCH_N
 from jaxrod.cli._output import _enable_compilation_cache
 from jaxrod.cli.bistability import add_cusp, add_foldcurve, add_map
-from jaxrod.cli.dynamics import add_modes, add_snap
+from jaxrod.cli.dynamics import add_modes
 from jaxrod.cli.inverse import add_design, add_fit
 from jaxrod.cli.magnet import add_branch, add_certify, add_folds, add_sweep
 from jaxrod.cli.reproduce import add_reproduce
 from jaxrod.cli.scene_file import add_equilibrium
+from jaxrod.cli.snap import add_snap
 from jaxrod.cli.three_d import add_outofplane, add_track
 from jaxrod.cli.uniform import add_greenhill
 from jaxrod.params import ParameterError

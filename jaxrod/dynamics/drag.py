@@ -29,7 +29,11 @@ AIR = {"viscosity": 1.81e-5, "density": 1.204}
 
 
 def time_scale(length: float, radius: float, youngs_modulus: float, density: float) -> float:
-    """T = L^2 sqrt(rho A_c / (E I)), seconds."""
+    """T = L^2 sqrt(rho A_c / (E I)), seconds (a solid round rod of the given radius)."""
+    for name, v in (("length", length), ("radius", radius),
+                    ("youngs_modulus", youngs_modulus), ("density", density)):
+        if not (math.isfinite(v) and v > 0):
+            raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
     area, inertia = math.pi * radius**2, math.pi * radius**4 / 4.0
     return length**2 * math.sqrt(density * area / (youngs_modulus * inertia))
 

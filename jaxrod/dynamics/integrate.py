@@ -17,7 +17,10 @@ the forcing of Lagrange-d'Alembert,
 
 are solved for q_{k+1} by Newton (``jaxrod.solvers.newton``) at every step of a ``lax.scan``.
 Damping is a linear drag c per unit length on the velocity, f^-+ = -(c / 2) J(q_mid)^T W
-(r(q1) - r(q0)) (c in units of sqrt(rho A_c E I) / L^2). Without damping the scheme is
+(r(q1) - r(q0)) (c in units of sqrt(rho A_c E I) / L^2), and internal Kelvin-Voigt damping,
+a viscous bending moment eta dkappa/dt with the dissipation 1/2 eta int |dkappa/dt|^2 ds
+(kappa = d3 x d3', ``Scene.curvatures``; eta = eta_KV / (E T), eta_KV the material's
+viscosity in Pa s and T the time unit), discretised alike. Without damping the scheme is
 symplectic: the energy oscillates at O(h^2) and does not drift. Loads may move in time: the
 input ``vary`` follows value(t) = start + rate * t.
 """
@@ -51,10 +54,24 @@ def _action(q0, q1, h, scene, disc):
 
 
 def _drag(q0, q1, c, scene, disc):
-    """f^- = f^+ = -(c / 2) J(q_mid)^T W (r(q1) - r(q0))."""
+    """f^- = f^+ = -(c / 2) J_r(q_mid)^T W (r(q1) - r(q0)) - (eta / 2) J_k(q_mid)^T W
+    (kappa(q1) - kappa(q0)), c = (drag c, Kelvin-Voigt eta)."""
+    drag, kv = c
+    mid = 0.5 * (q0 + q1)
+    W = disc.quad_weights[:, None]
     dr = positions(scene, q1, disc) - positions(scene, q0, disc)
-    _, pullback = jax.vjp(lambda q: positions(scene, q, disc), 0.5 * (q0 + q1))
-    return -0.5 * c * pullback(disc.quad_weights[:, None] * dr)[0]
+    dk = scene.curvatures(q1, disc) - scene.curvatures(q0, disc)
+    _, pull_r = jax.vjp(lambda q: positions(scene, q, disc), mid)
+    _, pull_k = jax.vjp(lambda q: scene.curvatures(q, disc), mid)
+    return -0.5 * (drag * pull_r(W * dr)[0] + kv * pull_k(W * dk)[0])
+
+
+def curvature_rate_form(scene, disc, q, v):
+    """K(q) v = J_k^T W J_k v: the Kelvin-Voigt dissipation 1/2 int |d kappa/dt|^2 ds as a
+    form in the velocity (on the planar rod the bending energy's Hessian)."""
+    _, kdot = jax.jvp(lambda y: scene.curvatures(y, disc), (q,), (v,))
+    _, pull = jax.vjp(lambda y: scene.curvatures(y, disc), q)
+    return pull(disc.quad_weights[:, None] * kdot)[0]
 
 
 def _step_residual(q1, args):
@@ -116,7 +133,9 @@ def _bdf_residual(q1, args):
     v1 = (q1 - a1 * q0 + a2 * qm) / (b * h)
     p1 = jax.grad(lambda v: _kinetic(scene1, disc, q1, v))(v1)
     dTdq = jax.grad(lambda q: _kinetic(scene1, disc, q, v1))(q1)
-    force = dTdq - FIXED.gradient(q1, 0.0, (scene1, disc)) - c * p1
+    drag, kv = c
+    force = dTdq - FIXED.gradient(q1, 0.0, (scene1, disc)) - drag * p1 \
+        - kv * curvature_rate_form(scene1, disc, q1, v1)
     return p1 - a1 * p0 + a2 * pm - b * h * force
 
 
@@ -189,9 +208,11 @@ class Trajectory:
 def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
              n: int = DEFAULT_N, velocity=None, vary: str | None = None,
              rate: float = 0.0, scheme: str = "midpoint", tol: float | None = None,
-             dt_max: float | None = None, max_steps: int = 20000) -> Trajectory:
+             dt_max: float | None = None, max_steps: int = 20000,
+             kelvin_voigt: float = 0.0) -> Trajectory:
     """The rod's motion from ``state`` (and ``velocity``, default at rest) until ``t_end``
-    with steps ``dt`` (module docstring). ``damping``: the linear drag coefficient c >= 0.
+    with steps ``dt`` (module docstring). ``damping``: the linear drag coefficient c >= 0;
+    ``kelvin_voigt``: the internal damping eta >= 0.
     ``vary``/``rate``: an input moving at a constant rate from the scene's value (a magnet
     on its path at a finite speed). ``scheme``: "midpoint" (variational, symplectic: the
     energy of an undamped motion oscillates at O(dt^2) without drift; the modes that dt does
@@ -209,8 +230,10 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
     for name, v in (("t_end", t_end), ("dt", dt)):
         if not (np.isfinite(v) and v > 0):
             raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
-    if not (np.isfinite(damping) and damping >= 0):
-        raise ParameterError(f"damping must be a finite number >= 0, got {damping!r}")
+    for name, v in (("damping", damping), ("kelvin_voigt", kelvin_voigt)):
+        if not (np.isfinite(v) and v >= 0):
+            raise ParameterError(f"{name} must be a finite number >= 0, got {v!r}")
+    c = (float(damping), float(kelvin_voigt))
     steps = int(np.ceil(t_end / dt - 1e-9))  # t_end / dt may round up past an integer
     start = 0.0
     if vary is not None:
@@ -223,11 +246,11 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
 
         p0 = mass_matrix(scene, q0, disc) @ jnp.asarray(velocity, jnp.float64)
     if tol is not None:
-        return _adaptive(scene, disc, q0, p0, t_end, dt, damping, vary, start, rate, scheme,
-                         tol, dt_max, max_steps)
+        return _adaptive(scene, disc, q0, p0, t_end, dt, c, vary, start, rate, scheme, tol,
+                         dt_max, max_steps)
     program = _program if scheme == "midpoint" else _program_bdf
     q, kin, pot, angle, tangent, X, conv, res = jax.device_get(program(
-        scene, disc, q0, p0, float(dt), steps, float(damping), vary, start, float(rate)))
+        scene, disc, q0, p0, float(dt), steps, c, vary, start, float(rate)))
     return Trajectory(time=dt * np.arange(1, steps + 1), states=np.asarray(q),
                       tip_angle_deg=np.degrees(angle), tip_tangent_deg=np.degrees(tangent),
                       tip_position=np.asarray(X), kinetic=np.asarray(kin),
@@ -235,8 +258,8 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
                       residual_norm=float(np.max(res)))
 
 
-def _adaptive(scene, disc, q0, p0, t_end, dt, damping, vary, start, rate, scheme, tol,
-              dt_max, max_steps):
+def _adaptive(scene, disc, q0, p0, t_end, dt, c, vary, start, rate, scheme, tol, dt_max,
+              max_steps):
     from jaxrod.dynamics.adaptive import run_adaptive
 
     if scheme != "bdf2":
@@ -249,8 +272,8 @@ def _adaptive(scene, disc, q0, p0, t_end, dt, damping, vary, start, rate, scheme
     if not (isinstance(max_steps, int) and max_steps >= 3):
         raise ParameterError(f"max_steps must be an integer >= 3, got {max_steps!r}")
     t, k, bufs = jax.device_get(run_adaptive(
-        scene, disc, q0, p0, float(t_end), float(dt), float(dt_max), float(tol), max_steps,
-        float(damping), vary, start, float(rate)))
+        scene, disc, q0, p0, float(t_end), float(dt), float(dt_max), float(tol), max_steps, c,
+        vary, start, float(rate)))
     time, q, kin, pot, angle, tangent, X, conv, res = (np.asarray(b)[:int(k)] for b in bufs)
     reached = float(t) >= float(t_end) * (1.0 - 1e-12)
     return Trajectory(time=time, states=q, tip_angle_deg=np.degrees(angle),

@@ -63,18 +63,22 @@ def _modes(scene, disc, x):
     mu, U = jnp.linalg.eigh(Ri @ M @ Ri.T)
     mu, U = mu[::-1], U[:, ::-1]  # the largest mu: the lowest frequencies
     V = Ri.T @ U / jnp.sqrt(mu)  # M-orthonormal
-    return 1.0 / mu - sigma, V
+    Jk = jax.jacfwd(lambda y: scene.curvatures(y, disc))(x)  # (n_q, 3, m)
+    K = jnp.einsum("j,jkm,jkn->mn", disc.quad_weights, Jk, Jk)
+    return 1.0 / mu - sigma, V, jnp.einsum("mk,mn,nk->k", V, K, V)
 
 
 @dataclasses.dataclass(frozen=True)
 class Modes:
     """``omega_squared`` (ascending) and ``omega`` (NaN where omega^2 < 0: unstable);
     ``shapes``: the mode shapes as states (columns, M-orthonormal); ``state``: the
-    equilibrium they are about."""
+    equilibrium they are about; ``curvature_rates``: v_k . K v_k, the Kelvin-Voigt
+    dissipation's form K (``jaxrod.dynamics.integrate``) on each shape."""
 
     omega_squared: np.ndarray
     shapes: np.ndarray
     state: np.ndarray
+    curvature_rates: np.ndarray | None = None
 
     @property
     def omega(self) -> np.ndarray:
@@ -85,10 +89,12 @@ class Modes:
     def stable(self) -> bool:
         return bool(self.omega_squared[0] > 0.0)
 
-    def damping_ratios(self, damping: float) -> np.ndarray:
-        """zeta_k = c / (2 omega_k) for a linear drag c per unit length (its nondimensional
-        form: the drag force c dr/dt acts on every mode alike, as the mass does)."""
-        return damping / (2.0 * self.omega)
+    def damping_ratios(self, damping: float, kelvin_voigt: float = 0.0) -> np.ndarray:
+        """zeta_k = (c + eta v_k . K v_k) / (2 omega_k) for a linear drag c per unit length
+        (the drag force c dr/dt acts on every mode alike, as the mass does) and the
+        Kelvin-Voigt damping eta (on the unloaded rod K = H: eta omega_k / 2); the modes'
+        coupling by the damping neglected."""
+        return (damping + kelvin_voigt * self.curvature_rates) / (2.0 * self.omega)
 
     def as_dict(self, count: int | None = None) -> dict:
         k = slice(0, count)
@@ -105,8 +111,8 @@ def modes(scene: Scene, state=None, n: int = DEFAULT_N) -> Modes:
     x = jnp.asarray(state, jnp.float64)
     if x.shape != (disc.size,):
         raise ParameterError(f"state has shape {x.shape}; degree {n} needs ({disc.size},)")
-    lam, V = jax.device_get(_modes(scene, disc, x))
-    return Modes(np.asarray(lam), np.asarray(V), np.asarray(x))
+    lam, V, kv = jax.device_get(_modes(scene, disc, x))
+    return Modes(np.asarray(lam), np.asarray(V), np.asarray(x), np.asarray(kv))
 
 
 @jit(static_argnames=("vary", "count"))
@@ -130,6 +136,7 @@ def in_hertz(omega, length: float, radius: float, youngs_modulus: float,
              density: float) -> np.ndarray:
     """Frequencies in Hz of nondimensional angular frequencies: f = omega / (2 pi T),
     T = L^2 sqrt(rho A_c / (E I)) (a solid round rod of the given radius)."""
-    area, inertia = math.pi * radius**2, math.pi * radius**4 / 4.0
-    T = length**2 * math.sqrt(density * area / (youngs_modulus * inertia))
+    from jaxrod.dynamics.drag import time_scale
+
+    T = time_scale(length, radius, youngs_modulus, density)
     return np.asarray(omega) / (2.0 * math.pi * T)

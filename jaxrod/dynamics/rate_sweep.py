@@ -7,9 +7,9 @@ swept at rate eps, the switch lags the fold by an amount that scales as eps^(2/3
 damping dominates and as eps^(4/5) where inertia does (tests/test_dynamics.py measures both
 and the prefactors). A switch is a snap of the tip: a run of steps where the tip's direction
 moves faster than ``threshold`` times the fastest it moves in the whole sweep and ten times
-its median speed before the first such step (the rod following the input), runs closer than
-``merge`` time units being one snap and its ringing; its value is where the tip is fastest
-in the first run.
+its median speed in time (the rod following the input; before the first such step, if lower:
+an undamped rod rings on after a snap), runs closer than ``merge`` time units being one snap
+and its ringing; its value is where the tip is fastest in the first run.
 """
 
 from __future__ import annotations
@@ -41,14 +41,25 @@ class RateSweep:
                 "converged": self.trajectory.converged}
 
 
+def _median_in_time(speed, dt) -> float:
+    """The speed exceeded for half of the time (steps weighted by their length)."""
+    order = np.argsort(speed)
+    weight = np.cumsum(dt[order])
+    return float(speed[order][np.searchsorted(weight, 0.5 * weight[-1])])
+
+
 def switches(time, values, tip_deg, threshold: float = 0.25, merge: float = 20.0) -> list:
     """The input's values where the tip snapped (module docstring)."""
-    speed = np.abs(np.diff(np.r_[tip_deg[0], tip_deg])) / np.diff(np.r_[0.0, time])
+    dt = np.diff(np.r_[0.0, time])
+    speed = np.abs(np.diff(np.r_[tip_deg[0], tip_deg])) / dt
     fast = speed > threshold * np.max(speed)
-    # a snap is fast against the sweep's own following motion too: the median speed before
-    # the first fast step (an undamped rod rings on after it)
+    # a snap is fast against the sweep's own following motion too: the median speed in time
+    # over the whole sweep, or before the first fast step if lower (an undamped rod rings on
+    # after its snap)
     first = int(np.argmax(fast))
-    following = np.median(speed[:first] if first >= 10 else speed)
+    following = _median_in_time(speed, dt)
+    if first >= 10:
+        following = min(following, _median_in_time(speed[:first], dt[:first]))
     fast &= speed > 10.0 * following
     edges = np.diff(np.r_[0, fast.astype(int), 0])
     starts, ends = np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]

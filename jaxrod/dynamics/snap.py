@@ -74,9 +74,11 @@ class Snap:
 
 
 def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: float = 0.01,
-         past: float = 1e-3, band: float = 0.5, n: int = DEFAULT_N) -> Snap:
+         past: float = 1e-3, band: float = 0.5, n: int = DEFAULT_N,
+         kelvin_voigt: float = 0.0) -> Snap:
     """The snap from ``fold`` (of ``scene``, from ``jr.scene_folds``) with drag ``damping``;
-    ``past``: how far the input is moved past the fold (its units), ``band``: degrees."""
+    ``past``: how far the input is moved past the fold (its units), ``band``: degrees;
+    ``kelvin_voigt``: internal damping (``jaxrod.dynamics.integrate``)."""
     if not fold.converged:
         raise ParameterError("fold: the fold did not converge; refine it first")
     for name, v in (("past", past), ("band", band)):
@@ -86,7 +88,8 @@ def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: floa
     side = -1.0 if fold.normal_form_c > 0 else 1.0
     value = fold.value + side * past
     at = scene.replace(fold.vary, value)
-    tr = simulate(at, fold.state, t_end, dt, damping=damping, n=n, scheme="bdf2")
+    tr = simulate(at, fold.state, t_end, dt, damping=damping, n=n, scheme="bdf2",
+                  kelvin_voigt=kelvin_voigt)
     rest = equilibrium(at, n=n, state=tr.states[-1], throw=False)
     if not (rest.converged and rest.stable and tr.kinetic[-1] < 1e-8):
         damped = simulate(at, fold.state, t_end, dt, damping=max(damping, 2.0), n=n,
@@ -99,7 +102,7 @@ def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: floa
     i_leave = int(np.argmax(away)) if away.any() else len(tip)
     inside = np.nonzero(~off[i_leave:])[0]
     arrive = float(tr.time[i_leave + inside[0]]) if leave is not None and inside.size else None
-    settled = rest.converged and not off[-1] and damping > 0
+    settled = rest.converged and not off[-1] and damping + kelvin_voigt > 0
     settle = float(tr.time[np.nonzero(off)[0][-1] + 1]) if settled and off.any() else None
     speed = np.abs(np.diff(np.r_[fold.tip_angle_deg, tip])) / dt
     direction = np.sign(rest.tip_angle_deg - fold.tip_angle_deg)
@@ -131,7 +134,7 @@ def duration_of(scene: Scene, fold: Fold, damping, t_end: float = 60.0, dt: floa
     x, value = z[:m], fold.value + z[-1]
     at = scene.replace(fold.vary, value + side * past)
     start = jnp.degrees(tip(scene.replace(fold.vary, value), x, disc)[0])
-    out = _run_bdf(at, disc, x, jnp.zeros(m), dt, steps, damping, None, 0.0, 0.0)
+    out = _run_bdf(at, disc, x, jnp.zeros(m), dt, steps, (damping, 0.0), None, 0.0, 0.0)
     angle, converged = jnp.degrees(out[3]), out[-2]
     time = dt * jnp.arange(0, steps + 1)
     angle = jnp.concatenate([start[None], angle])

@@ -254,6 +254,8 @@ def scene_from(data: dict) -> FileScene:
             _fail("rod.radius", f"{r:g} m is not below the length {L:g} m: not a slender rod")
         area, inertia = math.pi * r**2, math.pi * r**4 / 4.0
         bending = E * inertia
+        if "density" in rod and not _number(rod, "density", "rod.") > 0:
+            _fail("rod.density", "must be > 0 kg/m^3 (the rod's mass: its weight and inertia)")
     else:
         L = 1.0
     if "gravity" in data:

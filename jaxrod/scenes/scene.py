@@ -125,6 +125,12 @@ class Scene:
         a = jnp.einsum("jrm,m->jr", disc.jet_matrix, x)
         return jax.vmap(lambda aj: self._jet(aj)[0])(a)
 
+    def curvatures(self, x, disc):
+        """The curvature vectors kappa = d3 x d3' at the quadrature nodes, (n_q, 3) (on the
+        planar rod (0, theta', 0)): what the Kelvin-Voigt damping acts on."""
+        a = jnp.einsum("jrm,m->jr", disc.jet_matrix, x)
+        return jax.vmap(lambda aj: jnp.cross(*self._jet(aj)))(a)
+
     def positions(self, x, disc, d3=None):
         """r(s_j) = int_0^{s_j} d3 at the quadrature nodes (rod lengths), (n_q, 3)."""
         d3 = self.directors(x, disc) if d3 is None else d3
