@@ -2,6 +2,7 @@
 drift, second order) and BDF2 (L-stable: settles on the static equilibrium; the snap past
 a fold lands where the quasi-static sweep's descent does)."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -38,6 +39,24 @@ def test_a_small_oscillation_has_the_modes_period_to_second_order():
         assert np.ptp(tr.energy) <= 1e-8 * np.mean(tr.energy)
     assert errors[-1] < 1e-4
     assert 3.5 < errors[0] / errors[1] < 4.5 and 3.5 < errors[1] / errors[2] < 4.5
+
+
+def test_the_3d_rod_swings_as_the_planar_one():
+    """The upright rod under gravity on the 3D director chart: its modes come in pairs
+    equal to the planar rod's (to 1e-10), and released from one of them it swings with the
+    period 2 pi / omega_1 (to the midpoint scheme's dt^2), the energy held to 1e-8."""
+    scene3 = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(2.0)}, geometry="3d")
+    planar = modes(jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(2.0)}), n=12)
+    m = modes(scene3, n=12)
+    assert m.omega[:6] == pytest.approx(np.repeat(planar.omega[:3], 2), rel=1e-10)
+    T = 2 * math.pi / m.omega[0]
+    q0 = m.state + 1e-3 * m.shapes[:, 0] / np.max(np.abs(m.shapes[:, 0]))
+    tr = simulate(scene3, q0, 3 * T, T / 200, n=12)
+    horizontal = tr.tip_position[:, :2]
+    swing = dataclasses.replace(tr, tip_position=np.c_[horizontal @ horizontal[0], 0 * tr.time,
+                                                       0 * tr.time])
+    assert tr.converged and abs(_period(swing) - T) < 1e-4 * T
+    assert np.ptp(tr.energy) <= 1e-8 * np.mean(tr.energy)
 
 
 def test_large_motion_energy_without_drift():

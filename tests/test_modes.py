@@ -104,15 +104,23 @@ def test_in_hertz():
         <= 1e-6 * f
 
 
-def test_cli_modes_json():
+def test_cli_modes_json(tmp_path):
+    """The clamped rod's modes from the command line, with the damping ratios of a drag c
+    and a Kelvin-Voigt eta (c / 2 omega + eta omega / 2 on the unloaded rod) and a figure of
+    the shapes."""
     proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "modes", "--G", "0", "--A", "0",
-                           "--json"], capture_output=True, text=True, timeout=600,
-                          env={**os.environ, "JAXROD_NO_CACHE": "1"})
+                           "--json", "--damping", "0.5", "--kelvin-voigt", "1e-3", "--plot",
+                           str(tmp_path / "modes.png")], capture_output=True, text=True,
+                          timeout=600, env={**os.environ, "JAXROD_NO_CACHE": "1"})
     assert proc.returncode == 0, proc.stderr
-    omega = json.loads(proc.stdout)["omega"]
+    out = json.loads(proc.stdout)
+    omega = out["omega"]
     assert omega == sorted(omega)
     for w, r in zip(omega[:3], cantilever_omegas(3)):
         assert abs(w - r) <= 1e-8 * r
+    for w, z in zip(omega, out["damping_ratio"]):
+        assert z == pytest.approx(0.5 / (2 * w) + 1e-3 * w / 2, rel=1e-8)
+    assert (tmp_path / "modes.png").stat().st_size > 0
 
 
 def test_modes_along_a_branch_change_sign_at_its_folds():
@@ -126,3 +134,16 @@ def test_modes_along_a_branch_change_sign_at_its_folds():
     assert np.array_equal(w2[:, 0] > 0, b.stable)
     changes = np.nonzero(np.sign(w2[:-1, 0]) != np.sign(w2[1:, 0]))[0]
     assert np.array_equal(changes, b.fold_indices)
+
+
+def test_cli_branch_of_a_scene_file_has_the_modes_as_rows(capsys):
+    """jaxrod branch RIG --modes 2: the lowest omega^2 at every point, negative exactly where
+    the branch is unstable (it crosses zero at both folds of the rotating field)."""
+    from jaxrod.cli import main
+
+    assert main(["branch", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg",
+                 "--from", "90", "--to", "300", "--modes", "2", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    w2 = np.array(out["omega_squared"])
+    assert w2.shape == (out["points"], 2) and len(out["folds"]) == 2
+    assert np.array_equal(w2[:, 0] > 0, np.array(out["stable"]))

@@ -47,17 +47,30 @@ def cmd_modes(args) -> int:
     m = modes(scene, state, n=args.n)
     out = {"inputs": inputs, "n": args.n, **m.as_dict(args.count),
            "units": "omega in 1 / (L^2 sqrt(rho A_c / (E I)))"}
+    for name in ("damping", "kelvin_voigt"):
+        v = getattr(args, name)
+        if not (math.isfinite(v) and v >= 0):
+            raise ParameterError(f"{name.replace('_', '-')} must be a finite number >= 0, got "
+                                 f"{v!r}")
+    if args.damping or args.kelvin_voigt:
+        out["damping_ratio"] = [None if not math.isfinite(z) else float(z) for z in
+                                m.damping_ratios(args.damping, args.kelvin_voigt)[:args.count]]
     rod = (file.data.get("rod", {}) if file is not None else {})
     if file is not None and file.length != 1.0 and "density" in rod:
         out["frequency_hz"] = [float(f) for f in in_hertz(
             np.nan_to_num(m.omega[:args.count]), rod["length"], rod["radius"],
             rod["youngs_modulus"], rod["density"])]
+    if args.plot:
+        from jaxrod.dynamics.figures import modes_figure
+
+        modes_figure(scene, m, n=args.n, count=min(args.count, 4)).savefig(args.plot, dpi=150)
     if args.json:
         print(json.dumps(out))
     else:
-        hz = out.get("frequency_hz")
+        hz, zeta = out.get("frequency_hz"), out.get("damping_ratio")
         for k, w in enumerate(out["omega"]):
             extra = f"  ({hz[k]:.6g} Hz)" if hz else ""
+            extra += f"  damping ratio {zeta[k]:.4g}" if zeta and zeta[k] is not None else ""
             print(f"mode {k + 1}: omega = {w if w is None else f'{w:.10g}'}{extra}")
         print("stable" if m.stable else "UNSTABLE: omega^2 < 0 (NaN omega)")
     return 0
@@ -82,5 +95,10 @@ def add_modes(sub) -> None:
                     help="about the straight rod (default: the ramped equilibrium)")
     mo.add_argument("--count", type=int, default=6, help="how many modes (default 6)")
     mo.add_argument("--n", type=_degree("N"), default=24, help="Chebyshev degree (default 24)")
+    mo.add_argument("--damping", type=_float("damping"), default=0.0,
+                    help="linear drag per unit length: print the damping ratios")
+    mo.add_argument("--kelvin-voigt", type=_float("kelvin-voigt"), default=0.0,
+                    help="internal damping eta = eta_KV / (E T): print the damping ratios")
     mo.add_argument("--json", action="store_true", help="print one JSON object")
+    mo.add_argument("--plot", metavar="PATH", help="write a figure of the mode shapes")
     mo.set_defaults(func=cmd_modes)

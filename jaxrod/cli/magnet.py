@@ -248,6 +248,9 @@ def add_branch(sub) -> None:
     add_scene_file_inputs(b, vary=True)
     add_magnet_inputs(b)
     b.add_argument("--out", help="output directory (required for the paper's diagram)")
+    b.add_argument("--modes", type=int, default=0, metavar="K",
+                   help="scene file: the lowest K omega^2 of the vibration modes at every "
+                   "point (0 at a fold: the snap's soft mode)")
     b.set_defaults(func=cmd_branch)
 
 

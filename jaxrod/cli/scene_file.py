@@ -120,14 +120,23 @@ def branch_on_file(args) -> int:
                               "residual_norm": p.residual_norm} for p in points],
            "status": [s.name.lower() for s in b.status], "complete": b.complete,
            "converged": all(f.converged for f in folds) and all(p.converged for p in points)}
+    w2 = None
+    if getattr(args, "modes", 0):  # the vibration modes as rows of the branch
+        from jaxrod.dynamics.modes import modes_along
+
+        w2 = modes_along(file.scene, b, n=args.n, count=args.modes)
+        out["omega_squared"] = w2.tolist()
     if args.out:
         from jaxrod.cli._output import _output_dir
 
         out_dir = _output_dir(args.out)
         (out_dir / "branch.json").write_text(json.dumps(out, indent=1))
-        rows = np.column_stack([values, np.degrees(b.tip), b.min_eig, b.morse_index])
+        rows = np.column_stack([values, np.degrees(b.tip), b.min_eig, b.morse_index]
+                               + ([w2] if w2 is not None else []))
+        extra = "".join(f",omega_squared_{k + 1}" for k in range(args.modes)) if w2 is not \
+            None else ""
         np.savetxt(out_dir / "branch.csv", rows, delimiter=",",
-                   header=f"{args.vary},tip_angle_deg,min_eig,morse_index", comments="")
+                   header=f"{args.vary},tip_angle_deg,min_eig,morse_index{extra}", comments="")
     if args.json:
         print(json.dumps(out))
     else:

@@ -56,6 +56,29 @@ def rod_shapes(scene, states, n: int):
         jnp.asarray(states)))
 
 
+def modes_figure(scene, m, n: int, count: int = 4, amplitude: float = 0.15):
+    """The equilibrium's centre line and, beside it, each of the lowest ``count`` modes'
+    shapes: the centre line displaced along the mode (its largest displacement
+    ``amplitude`` rod lengths), both signs."""
+    base = rod_shapes(scene, m.state[None], n)[0]
+    fig, axes = plt.subplots(1, count, figsize=(3 * count, 3.6), sharey=True)
+    for k, ax in enumerate(np.atleast_1d(axes)):
+        v = m.shapes[:, k]
+        for sign, style in ((1.0, "-"), (-1.0, "--")):
+            x = m.state + sign * 1e-6 * v
+            dr = (rod_shapes(scene, x[None], n)[0] - base) / 1e-6  # the shape's displacement
+            dr = dr * amplitude / max(np.max(np.linalg.norm(dr, axis=1)), 1e-300)
+            ax.plot(base[:, 0] + dr[:, 0], base[:, 2] + dr[:, 2], style, color=f"C{k}")
+        ax.plot(base[:, 0], base[:, 2], color="0.5", lw=1)
+        w = m.omega[k]
+        ax.set_title(f"mode {k + 1}: omega = " + ("unstable" if np.isnan(w) else f"{w:.5g}"))
+        ax.set_aspect("equal")
+        ax.set_xlabel("x / L")
+    np.atleast_1d(axes)[0].set_ylabel("z / L")
+    fig.tight_layout()
+    return fig
+
+
 def snap_animation(scene, s, n: int, path: str, time_scale: float | None = None,
                    frames: int = 120, fps: int = 20):
     """An animation of the rod's shape during the snap (GIF by Pillow, MP4 by ffmpeg),
