@@ -84,7 +84,7 @@ def test_bdf2_settles_on_the_static_equilibrium():
 def test_a_damped_mode_decays_as_the_damped_oscillator(scheme):
     """The first mode released with drag c: each mode obeys x'' + c x' + omega^2 x = 0
     (the drag acts like the mass), so the tip follows x0 exp(-c t / 2) (cos(w t) +
-    c / (2 w) sin(w t)), w = sqrt(omega^2 - c^2 / 4); both schemes to second order."""
+    c / (2 w) sin(w t)), w = sqrt(omega^2 - c^2 / 4); every scheme to second order."""
     m = modes(CANTILEVER, n=12)
     c, w1 = 0.8, m.omega[0]
     wd = math.sqrt(w1**2 - c**2 / 4)

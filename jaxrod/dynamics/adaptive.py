@@ -21,7 +21,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxrod.dynamics.integrate import _scene_at, bdf_step, observe
+from jaxrod.dynamics.integrate import bdf_step, observe
+from jaxrod.dynamics.lagrangian import scene_at
 from jaxrod.programs import jit
 
 ERROR_CONSTANT = 2.0 / 11.0
@@ -50,7 +51,7 @@ def _run(scene, disc, q0, p0, t_end, dt, h_max, tol, max_steps, c, vary, start, 
         t, h, k, tries, hist, bufs = carry
         q, qm, qmm, p, pm, h1, h2 = hist
         h = jnp.minimum(jnp.minimum(h, h_max), t_end - t)
-        at = _scene_at(scene, vary, start, rate, t + h)
+        at = scene_at(scene, vary, start, rate, t + h)
         ratio = jnp.where(k == 0, 0.0, h / h1)
         guess = jnp.where(k == 0, q, q + ratio * (q - qm))
         res, v1, p1 = bdf_step(at, disc, q, qm, p, pm, h, ratio, c, guess)

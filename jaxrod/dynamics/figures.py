@@ -112,12 +112,13 @@ def snap_animation(scene, s, n: int, path: str, time_scale: float | None = None,
     return path
 
 
-def lag_figure(rates, lags, normal_form, unit: str = "rad"):
+def lag_figure(rates, lags, normal_form, unit: str = "rad", ax=None):
     """The switching lag against the rate (log-log): the measured points, the normal form's
-    full prediction, its damped (2/3) and inertial (4/5) power laws, and the crossover."""
+    full prediction, its damped (2/3) and inertial (4/5) power laws, and the crossover
+    (on ``ax``, or a new figure)."""
     rates, lags = np.asarray(rates), np.asarray(lags)
     fine = np.geomspace(rates.min() / 2, rates.max() * 2, 60)
-    fig, ax = plt.subplots(figsize=(6.5, 4.8))
+    fig, ax = plt.subplots(figsize=(6.5, 4.8)) if ax is None else (ax.figure, ax)
     ax.loglog(rates, lags, "o", label="simulated (BDF2, adaptive steps)")
     ax.loglog(fine, [normal_form.lag(e) for e in fine], "-", lw=1.5,
               label="normal form (inertia and drag)")
@@ -132,5 +133,4 @@ def lag_figure(rates, lags, normal_form, unit: str = "rad"):
     ax.set_xlabel(f"sweep rate ({unit} per unit time)")
     ax.set_ylabel(f"switch - fold ({unit})")
     ax.legend(fontsize=8)
-    fig.tight_layout()
     return fig

@@ -33,16 +33,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxrod.dynamics.lagrangian import curvature_rate_form, kinetic, scene_at
 from jaxrod.dynamics.modes import positions
 from jaxrod.equilibria.equilibrium import DEFAULT_N, FIXED, discretise, tip, tip_tangent
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.newton import newton
-
-
-def _scene_at(scene, vary, start, rate, t):
-    return scene if vary is None else scene.replace(vary, start + rate * t)
 
 
 def _action(q0, q1, h, scene, disc):
@@ -66,14 +63,6 @@ def _drag(q0, q1, c, scene, disc):
     return -0.5 * (drag * pull_r(W * dr)[0] + kv * pull_k(W * dk)[0])
 
 
-def curvature_rate_form(scene, disc, q, v):
-    """K(q) v = J_k^T W J_k v: the Kelvin-Voigt dissipation 1/2 int |d kappa/dt|^2 ds as a
-    form in the velocity (on the planar rod the bending energy's Hessian)."""
-    _, kdot = jax.jvp(lambda y: scene.curvatures(y, disc), (q,), (v,))
-    _, pull = jax.vjp(lambda y: scene.curvatures(y, disc), q)
-    return pull(disc.quad_weights[:, None] * kdot)[0]
-
-
 def _step_residual(q1, args):
     """p_k + D_1 L_d(q_k, q_{k+1}) + f^-(q_k, q_{k+1})."""
     q0, p0, h, c, scene_mid, disc = args
@@ -93,7 +82,7 @@ def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate):
     def step(carry, k):
         q, q_prev, p = carry
         t_mid = (k + 0.5) * h
-        at = _scene_at(scene, vary, start, rate, t_mid)
+        at = scene_at(scene, vary, start, rate, t_mid)
         guess = 2.0 * q - q_prev
         res = newton(_step_residual, guess, (q, p, h, c, at, disc), tol=1e-12)
         q1 = res.x
@@ -101,7 +90,7 @@ def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate):
         dr = positions(at, q1, disc) - positions(at, q, disc)
         kinetic = 0.5 * jnp.sum(W * dr**2) / h**2
         potential = FIXED.energy(0.5 * (q + q1), 0.0, (at, disc))
-        end = _scene_at(scene, vary, start, rate, t_mid + 0.5 * h)
+        end = scene_at(scene, vary, start, rate, t_mid + 0.5 * h)
         angle, X = tip(end, q1, disc)
         out = (q1, kinetic, potential, angle, tip_tangent(end, q1, disc), X, res.converged,
                res.residual_norm)
@@ -109,12 +98,6 @@ def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate):
 
     _, out = jax.lax.scan(step, (q0, q0, p0), jnp.arange(steps))
     return out
-
-
-def _kinetic(scene, disc, q, v):
-    """T(q, v) = 1/2 sum_j w_j |J_j(q) v|^2 (J = dr/dq)."""
-    _, rdot = jax.jvp(lambda y: positions(scene, y, disc), (q,), (v,))
-    return 0.5 * jnp.sum(disc.quad_weights[:, None] * rdot**2)
 
 
 def bdf_coefficients(ratio):
@@ -131,8 +114,8 @@ def _bdf_residual(q1, args):
     q0, qm, p0, pm, h, c, coef, scene1, disc = args
     a1, a2, b = coef
     v1 = (q1 - a1 * q0 + a2 * qm) / (b * h)
-    p1 = jax.grad(lambda v: _kinetic(scene1, disc, q1, v))(v1)
-    dTdq = jax.grad(lambda q: _kinetic(scene1, disc, q, v1))(q1)
+    p1 = jax.grad(lambda v: kinetic(scene1, disc, q1, v))(v1)
+    dTdq = jax.grad(lambda q: kinetic(scene1, disc, q, v1))(q1)
     drag, kv = c
     force = dTdq - FIXED.gradient(q1, 0.0, (scene1, disc)) - drag * p1 \
         - kv * curvature_rate_form(scene1, disc, q1, v1)
@@ -146,21 +129,21 @@ def bdf_step(scene1, disc, q, qm, p, pm, h, ratio, c, guess):
     res = newton(_bdf_residual, guess, (q, qm, p, pm, h, c, coef, scene1, disc), tol=1e-12)
     a1, a2, b = coef
     v1 = (res.x - a1 * q + a2 * qm) / (b * h)
-    return res, v1, jax.grad(lambda v: _kinetic(scene1, disc, res.x, v))(v1)
+    return res, v1, jax.grad(lambda v: kinetic(scene1, disc, res.x, v))(v1)
 
 
 def observe(scene1, disc, q1, v1):
     """What a trajectory records at a step: kinetic and potential energy, the tip's
     direction, rotation and position."""
     angle, X = tip(scene1, q1, disc)
-    return (_kinetic(scene1, disc, q1, v1), FIXED.energy(q1, 0.0, (scene1, disc)), angle,
+    return (kinetic(scene1, disc, q1, v1), FIXED.energy(q1, 0.0, (scene1, disc)), angle,
             tip_tangent(scene1, q1, disc), X)
 
 
 def _run_bdf(scene, disc, q0, p0, h, steps, c, vary, start, rate):
     def step(carry, k):
         q, qm, p, pm = carry
-        at = _scene_at(scene, vary, start, rate, (k + 1.0) * h)
+        at = scene_at(scene, vary, start, rate, (k + 1.0) * h)
         first = k == 0
         guess = jnp.where(first, q, 2.0 * q - qm)
         res, v1, p1 = bdf_step(at, disc, q, qm, p, pm, h, jnp.where(first, 0.0, 1.0), c,
@@ -218,8 +201,9 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
     energy of an undamped motion oscillates at O(dt^2) without drift; the modes that dt does
     not resolve are not damped and ring), or "bdf2" (BDF2 on Lagrange's equations,
     L-stable: those modes die out, the resolved motion is second order; for settling
-    times). ``tol``: BDF2 with adaptive steps (``jaxrod.dynamics.adaptive``) at this local
-    accuracy, from the step ``dt``, no longer than ``dt_max``, at most ``max_steps`` kept
+    times).
+    ``tol``: BDF2 with adaptive steps (``jaxrod.dynamics.adaptive``) at this local accuracy,
+    from the step ``dt``, no longer than ``dt_max``, at most ``max_steps`` kept
     (``converged`` is False if they did not reach t_end)."""
     if scheme not in SCHEMES:
         raise ParameterError(f"scheme must be one of {', '.join(SCHEMES)}, got {scheme!r}")

@@ -2,7 +2,7 @@
 
 The input that the fold is met along is moved a little past the fold (``past``, to the side
 where the branch has no equilibrium nearby), and the motion from the fold's state at rest
-is integrated (``jaxrod.dynamics.integrate``, BDF2) with drag ``damping``. Defined, from
+is integrated (``jaxrod.dynamics.integrate``, BDF2 by default) with drag ``damping``. Defined, from
 the tip's direction (degrees from +z toward +x):
 
     leave     the first time the tip is more than ``band`` from its start (the fold's tip);
@@ -75,10 +75,12 @@ class Snap:
 
 def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: float = 0.01,
          past: float = 1e-3, band: float = 0.5, n: int = DEFAULT_N,
-         kelvin_voigt: float = 0.0) -> Snap:
+         kelvin_voigt: float = 0.0, scheme: str | None = None) -> Snap:
     """The snap from ``fold`` (of ``scene``, from ``jr.scene_folds``) with drag ``damping``;
     ``past``: how far the input is moved past the fold (its units), ``band``: degrees;
-    ``kelvin_voigt``: internal damping (``jaxrod.dynamics.integrate``)."""
+    ``kelvin_voigt``: internal damping (``jaxrod.dynamics.integrate``); ``scheme``: the
+    integrator (default BDF2, which settles; "midpoint" keeps an undamped snap's energy
+    without drift, to O(dt^2))."""
     if not fold.converged:
         raise ParameterError("fold: the fold did not converge; refine it first")
     for name, v in (("past", past), ("band", band)):
@@ -88,7 +90,8 @@ def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: floa
     side = -1.0 if fold.normal_form_c > 0 else 1.0
     value = fold.value + side * past
     at = scene.replace(fold.vary, value)
-    tr = simulate(at, fold.state, t_end, dt, damping=damping, n=n, scheme="bdf2",
+    scheme = scheme or "bdf2"
+    tr = simulate(at, fold.state, t_end, dt, damping=damping, n=n, scheme=scheme,
                   kelvin_voigt=kelvin_voigt)
     rest = equilibrium(at, n=n, state=tr.states[-1], throw=False)
     if not (rest.converged and rest.stable and tr.kinetic[-1] < 1e-8):
