@@ -142,7 +142,7 @@ def prediction(scene, key, state, stop, rate, damping, n, unit):
     the normal form's switch at ``rate`` (``jaxrod.dynamics.normal_form``), in units of
     ``unit`` (the scene's value of 1 in the user's units); None if it meets no fold."""
     import jaxrod as jr
-    from jaxrod.dynamics.normal_form import normal_form
+    from jaxrod.dynamics.normal_form import DAMPED_EXPONENT, INERTIAL_EXPONENT, normal_form
 
     start = float(scene.value(key))
     folds = jr.scene_folds(scene, key, start, stop, n=n, state=state, throw=False)
@@ -154,9 +154,10 @@ def prediction(scene, key, state, stop, rate, damping, n, unit):
     d, i = nf.damped_prefactor, nf.inertial_prefactor
     return {"fold": nf.value / unit, "switch": (nf.value + side * lag) / unit,
             "lag": lag / unit,
-            "damped": {"exponent": 2.0 / 3.0, "prefactor": None if math.isinf(d) else
-                       d * unit ** (2.0 / 3.0 - 1.0)},
-            "inertial": {"exponent": 0.8, "prefactor": i * unit ** (0.8 - 1.0)},
+            "damped": {"exponent": DAMPED_EXPONENT, "prefactor": None if math.isinf(d) else
+                       d * unit ** (DAMPED_EXPONENT - 1.0)},
+            "inertial": {"exponent": INERTIAL_EXPONENT,
+                         "prefactor": i * unit ** (INERTIAL_EXPONENT - 1.0)},
             "crossover_rate": nf.crossover_rate / unit, "modal_mass": nf.mass,
             "drive": nf.drive * unit, "curvature": nf.curvature}
 

@@ -16,6 +16,7 @@ import numpy as np  # noqa: E402
 from matplotlib import animation  # noqa: E402
 
 from jaxrod.equilibria.equilibrium import discretise  # noqa: E402
+from jaxrod.programs import jit  # noqa: E402
 
 
 def _time(tr, time_scale):
@@ -49,11 +50,14 @@ def snap_figure(s, time_scale: float | None = None):
     return fig
 
 
+@jit
+def _shapes(scene, disc, states):
+    return jax.vmap(lambda x: scene.positions(x, disc))(states)
+
+
 def rod_shapes(scene, states, n: int):
     """The rod's centre line r(s) at the quadrature nodes for each state, (k, n_q, 3)."""
-    disc = discretise(scene, n)
-    return np.asarray(jax.jit(jax.vmap(lambda x: scene.positions(x, disc)))(
-        jnp.asarray(states)))
+    return np.asarray(_shapes(scene, discretise(scene, n), jnp.asarray(states)))
 
 
 def modes_figure(scene, m, n: int, count: int = 4, amplitude: float = 0.15):

@@ -75,7 +75,7 @@ class Snap:
 
 def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: float = 0.01,
          past: float = 1e-3, band: float = 0.5, n: int = DEFAULT_N,
-         kelvin_voigt: float = 0.0, scheme: str | None = None) -> Snap:
+         kelvin_voigt: float = 0.0, scheme: str = "bdf2") -> Snap:
     """The snap from ``fold`` (of ``scene``, from ``jr.scene_folds``) with drag ``damping``;
     ``past``: how far the input is moved past the fold (its units), ``band``: degrees;
     ``kelvin_voigt``: internal damping (``jaxrod.dynamics.integrate``); ``scheme``: the
@@ -90,7 +90,6 @@ def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: floa
     side = -1.0 if fold.normal_form_c > 0 else 1.0
     value = fold.value + side * past
     at = scene.replace(fold.vary, value)
-    scheme = scheme or "bdf2"
     tr = simulate(at, fold.state, t_end, dt, damping=damping, n=n, scheme=scheme,
                   kelvin_voigt=kelvin_voigt)
     rest = equilibrium(at, n=n, state=tr.states[-1], throw=False)
