@@ -31,7 +31,7 @@ def cmd_snap(args) -> int:
     fold = folds[0 if args.fold == "lower" else 1]
     kv = args.kelvin_voigt
     s = snap(scene, fold, args.damping, t_end=args.t_end, dt=args.dt, n=args.n,
-             kelvin_voigt=kv)
+             kelvin_voigt=kv, scheme=args.scheme)
     if physical is not None and args.medium == "air":  # Lamb's drag at the snap's peak speed
         from jaxrod.dynamics.drag import lamb_drag, nondimensional_damping
 
@@ -41,7 +41,7 @@ def cmd_snap(args) -> int:
                 lamb_drag(physical["radius"], speed), physical["length"], physical["radius"],
                 physical["E"], physical["density"])
             s = snap(scene, fold, args.damping, t_end=args.t_end, dt=args.dt, n=args.n,
-                     kelvin_voigt=kv)
+                     kelvin_voigt=kv, scheme=args.scheme)
     out = {"G": args.G, "M": args.M, "D": args.D, "fold": args.fold,
            "fold_alpha_deg": math.degrees(fold.value), "alpha_deg": math.degrees(s.value),
            "damping": args.damping, "kelvin_voigt": kv, **s.as_dict(),
@@ -106,6 +106,9 @@ def add_snap(sub) -> None:
     sn.add_argument("--n", type=_degree("N-magnet"), default=16)
     sn.add_argument("--kelvin-voigt", type=_float("kelvin-voigt"), default=0.0,
                     help="internal damping eta = eta_KV / (E T) (default 0)")
+    sn.add_argument("--scheme", choices=["bdf2", "discrete-gradient", "midpoint"],
+                    default=None, help="the integrator (default: bdf2 with damping, "
+                    "discrete-gradient, which conserves the energy, without)")
     sn.add_argument("--json", action="store_true", help="print one JSON object")
     sn.add_argument("--csv", metavar="PATH", help="write the time series as CSV")
     sn.add_argument("--plot", metavar="PATH", help="write a figure (tip and energy in time)")

@@ -157,7 +157,7 @@ def _run_bdf(scene, disc, q0, p0, h, steps, c, vary, start, rate):
 
 _program = jit(_run, static_argnames=("steps", "vary"))
 _program_bdf = jit(_run_bdf, static_argnames=("steps", "vary"))
-SCHEMES = ("midpoint", "bdf2")
+SCHEMES = ("midpoint", "bdf2", "discrete-gradient")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -202,6 +202,8 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
     not resolve are not damped and ring), or "bdf2" (BDF2 on Lagrange's equations,
     L-stable: those modes die out, the resolved motion is second order; for settling
     times).
+    "discrete-gradient" (``jaxrod.dynamics.discrete_gradient``: the energy of an undamped
+    motion conserved to round-off, a damped one's falling by exactly the dissipation).
     ``tol``: BDF2 with adaptive steps (``jaxrod.dynamics.adaptive``) at this local accuracy,
     from the step ``dt``, no longer than ``dt_max``, at most ``max_steps`` kept
     (``converged`` is False if they did not reach t_end)."""
@@ -232,7 +234,9 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
     if tol is not None:
         return _adaptive(scene, disc, q0, p0, t_end, dt, c, vary, start, rate, scheme, tol,
                          dt_max, max_steps)
-    program = _program if scheme == "midpoint" else _program_bdf
+    program = {"midpoint": _program, "bdf2": _program_bdf}.get(scheme)
+    if program is None:
+        from jaxrod.dynamics.discrete_gradient import run_discrete_gradient as program
     q, kin, pot, angle, tangent, X, conv, res = jax.device_get(program(
         scene, disc, q0, p0, float(dt), steps, c, vary, start, float(rate)))
     return Trajectory(time=dt * np.arange(1, steps + 1), states=np.asarray(q),

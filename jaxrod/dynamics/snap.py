@@ -2,7 +2,8 @@
 
 The input that the fold is met along is moved a little past the fold (``past``, to the side
 where the branch has no equilibrium nearby), and the motion from the fold's state at rest
-is integrated (``jaxrod.dynamics.integrate``, BDF2 by default) with drag ``damping``. Defined, from
+is integrated (``jaxrod.dynamics.integrate``: BDF2 with damping, the energy-conserving
+discrete gradient without) with drag ``damping``. Defined, from
 the tip's direction (degrees from +z toward +x):
 
     leave     the first time the tip is more than ``band`` from its start (the fold's tip);
@@ -46,7 +47,8 @@ from jaxrod.solvers.folds import differentiable_fold
 class Snap:
     """A snap from a fold: the trajectory, the moved input's value, leave/settle/duration
     (module docstring), where it rests (tip direction, stable), the largest tip speed
-    (degrees per unit time) and the overshoot past the resting tip (degrees)."""
+    (degrees per unit time), the overshoot past the resting tip (degrees) and the
+    integrator's ``scheme``."""
 
     trajectory: Trajectory
     value: float
@@ -59,6 +61,7 @@ class Snap:
     peak_tip_speed: float
     overshoot_deg: float
     band_deg: float
+    scheme: str = "bdf2"
 
     @property
     def transit(self) -> float | None:
@@ -70,17 +73,18 @@ class Snap:
             "settle": self.settle, "duration": self.duration, "transit": self.transit,
             "rest_tip_deg": self.rest_tip_deg,
             "rest_stable": self.rest_stable, "peak_tip_speed_deg": self.peak_tip_speed,
-            "overshoot_deg": self.overshoot_deg, "band_deg": self.band_deg}
+            "overshoot_deg": self.overshoot_deg, "band_deg": self.band_deg,
+            "scheme": self.scheme}
 
 
 def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: float = 0.01,
          past: float = 1e-3, band: float = 0.5, n: int = DEFAULT_N,
-         kelvin_voigt: float = 0.0, scheme: str = "bdf2") -> Snap:
+         kelvin_voigt: float = 0.0, scheme: str | None = None) -> Snap:
     """The snap from ``fold`` (of ``scene``, from ``jr.scene_folds``) with drag ``damping``;
     ``past``: how far the input is moved past the fold (its units), ``band``: degrees;
     ``kelvin_voigt``: internal damping (``jaxrod.dynamics.integrate``); ``scheme``: the
-    integrator (default BDF2, which settles; "midpoint" keeps an undamped snap's energy
-    without drift, to O(dt^2))."""
+    integrator (``simulate``'s; by default BDF2, which settles, where there is damping, and
+    the discrete gradient, which conserves the energy, where there is none)."""
     if not fold.converged:
         raise ParameterError("fold: the fold did not converge; refine it first")
     for name, v in (("past", past), ("band", band)):
@@ -90,6 +94,8 @@ def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: floa
     side = -1.0 if fold.normal_form_c > 0 else 1.0
     value = fold.value + side * past
     at = scene.replace(fold.vary, value)
+    if scheme is None:
+        scheme = "bdf2" if damping + kelvin_voigt > 0 else "discrete-gradient"
     tr = simulate(at, fold.state, t_end, dt, damping=damping, n=n, scheme=scheme,
                   kelvin_voigt=kelvin_voigt)
     rest = equilibrium(at, n=n, state=tr.states[-1], throw=False)
@@ -112,7 +118,7 @@ def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: floa
     return Snap(trajectory=tr, value=value, leave=leave, arrive=arrive, settle=settle,
                 duration=None if leave is None or settle is None else settle - leave,
                 rest_tip_deg=rest.tip_angle_deg, rest_stable=rest.stable,
-                peak_tip_speed=float(np.max(speed)), overshoot_deg=overshoot, band_deg=band)
+                peak_tip_speed=float(np.max(speed)), overshoot_deg=overshoot, band_deg=band, scheme=scheme)
 
 
 def _crossing(time, d, i):
