@@ -138,26 +138,14 @@ print("RESULT " + json.dumps([run(**job) for job in jobs]))
 '''
 
 
-def _cross(time, d, i):
-    """Where d crosses zero between samples i - 1 and i (linear interpolation)."""
-    return float(time[i - 1] + (time[i] - time[i - 1]) * d[i - 1] / (d[i - 1] - d[i]))
-
-
 def times(time, tip, start, band=BAND):
-    """leave, arrive, settle (module docstring), interpolated between the samples; the
-    resting angle = the last one."""
-    time, tip = np.asarray(time), np.asarray(tip)
-    away = np.abs(tip - start) - band
-    if not (away > 0).any():
-        return None, None, None, tip[-1]
-    i = int(np.argmax(away > 0))
-    rest = tip[-1]
-    off = np.abs(tip - rest) - band
-    inside = np.nonzero(off[i:] <= 0)[0]
-    arrive = _cross(time, off, i + inside[0]) if inside.size else None
-    last = np.nonzero(off > 0)[0]
-    settle = _cross(time, off, last[-1] + 1) if last.size and off[-1] <= 0 else None
-    return _cross(time, away, i) if i > 0 else float(time[0]), arrive, settle, float(rest)
+    """leave, arrive, settle (jaxrod's definitions, ``band_times``: interpolated between the
+    samples; None where undefined) and the resting angle = the last one."""
+    from jaxrod.dynamics.snap import band_times
+
+    tip = np.asarray(tip)
+    found = [float(t) for t in band_times(np.asarray(time), tip, start, tip[-1], band)]
+    return (*(None if math.isnan(t) else t for t in found), float(tip[-1]))
 
 
 def jaxrod_runs(final_time, c, dts):

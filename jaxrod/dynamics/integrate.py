@@ -52,15 +52,18 @@ def _action(q0, q1, h, scene, disc):
 
 def _drag(q0, q1, c, scene, disc):
     """f^- = f^+ = -(c / 2) J_r(q_mid)^T W (r(q1) - r(q0)) - (eta / 2) J_k(q_mid)^T W
-    (kappa(q1) - kappa(q0)), c = (drag c, Kelvin-Voigt eta)."""
+    (kappa(q1) - kappa(q0)), c = (drag c, Kelvin-Voigt eta or None: none)."""
     drag, kv = c
     mid = 0.5 * (q0 + q1)
     W = disc.quad_weights[:, None]
     dr = positions(scene, q1, disc) - positions(scene, q0, disc)
-    dk = scene.curvatures(q1, disc) - scene.curvatures(q0, disc)
     _, pull_r = jax.vjp(lambda q: positions(scene, q, disc), mid)
+    force = -0.5 * drag * pull_r(W * dr)[0]
+    if kv is None:
+        return force
+    dk = scene.curvatures(q1, disc) - scene.curvatures(q0, disc)
     _, pull_k = jax.vjp(lambda q: scene.curvatures(q, disc), mid)
-    return -0.5 * (drag * pull_r(W * dr)[0] + kv * pull_k(W * dk)[0])
+    return force - 0.5 * kv * pull_k(W * dk)[0]
 
 
 def _step_residual(q1, args):
@@ -117,8 +120,9 @@ def _bdf_residual(q1, args):
     p1 = jax.grad(lambda v: kinetic(scene1, disc, q1, v))(v1)
     dTdq = jax.grad(lambda q: kinetic(scene1, disc, q, v1))(q1)
     drag, kv = c
-    force = dTdq - FIXED.gradient(q1, 0.0, (scene1, disc)) - drag * p1 \
-        - kv * curvature_rate_form(scene1, disc, q1, v1)
+    force = dTdq - FIXED.gradient(q1, 0.0, (scene1, disc)) - drag * p1
+    if kv is not None:
+        force = force - kv * curvature_rate_form(scene1, disc, q1, v1)
     return p1 - a1 * p0 + a2 * pm - b * h * force
 
 
@@ -219,7 +223,8 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
     for name, v in (("damping", damping), ("kelvin_voigt", kelvin_voigt)):
         if not (np.isfinite(v) and v >= 0):
             raise ParameterError(f"{name} must be a finite number >= 0, got {v!r}")
-    c = (float(damping), float(kelvin_voigt))
+    # no Kelvin-Voigt damping: None, so that its terms are not compiled in
+    c = (float(damping), float(kelvin_voigt) if kelvin_voigt > 0 else None)
     steps = int(np.ceil(t_end / dt - 1e-9))  # t_end / dt may round up past an integer
     start = 0.0
     if vary is not None:

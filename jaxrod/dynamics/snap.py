@@ -17,10 +17,13 @@ stability; without enough damping to settle by t_end, it is where the same start
 rest with the drag raised to 2. Near the fold the rod leaves slowly (the normal form's
 bottleneck), so ``leave`` depends on ``past``; the duration hardly does.
 
+``leave``, ``arrive`` and ``settle`` are interpolated linearly between the samples where
+the tip crosses the band (``band_times``: one definition for ``snap``, ``duration_of`` and
+the benchmarks).
+
 ``duration_of`` is the same duration as a JAX function of the scene (its inputs traced):
 the fold re-solved by Moore-Spence and differentiated implicitly, the motion by fixed-step
-BDF2 in a ``lax.scan``, ``leave`` and ``settle`` interpolated linearly between the steps
-where the tip crosses the band, the resting direction the last step's. Its forward-mode
+BDF2 in a ``lax.scan``, the resting direction the last step's. Its forward-mode
 derivative (``jax.jvp``, ``jax.jacfwd``) in any input, the Young's modulus through the
 groups and the time unit, is exact for the discrete duration (tests/test_dynamics.py: against
 central differences).
@@ -104,27 +107,46 @@ def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: floa
                           scheme="bdf2")
         rest = equilibrium(at, n=n, state=damped.states[-1], throw=False)
     tip = tr.tip_angle_deg
-    away = np.abs(tip - fold.tip_angle_deg) > band
-    leave = float(tr.time[np.argmax(away)]) if away.any() else None
-    off = np.abs(tip - rest.tip_angle_deg) > band
-    i_leave = int(np.argmax(away)) if away.any() else len(tip)
-    inside = np.nonzero(~off[i_leave:])[0]
-    arrive = float(tr.time[i_leave + inside[0]]) if leave is not None and inside.size else None
-    settled = rest.converged and not off[-1] and damping + kelvin_voigt > 0
-    settle = float(tr.time[np.nonzero(off)[0][-1] + 1]) if settled and off.any() else None
+    leave, arrive, settle = (None if math.isnan(t) else t for t in map(float, band_times(
+        np.r_[0.0, tr.time], np.r_[fold.tip_angle_deg, tip], fold.tip_angle_deg,
+        rest.tip_angle_deg, band)))
+    if not (rest.converged and damping + kelvin_voigt > 0):
+        settle = None
     speed = np.abs(np.diff(np.r_[fold.tip_angle_deg, tip])) / dt
     direction = np.sign(rest.tip_angle_deg - fold.tip_angle_deg)
     overshoot = float(max(0.0, np.max(direction * (tip - rest.tip_angle_deg))))
     return Snap(trajectory=tr, value=value, leave=leave, arrive=arrive, settle=settle,
                 duration=None if leave is None or settle is None else settle - leave,
                 rest_tip_deg=rest.tip_angle_deg, rest_stable=rest.stable,
-                peak_tip_speed=float(np.max(speed)), overshoot_deg=overshoot, band_deg=band, scheme=scheme)
+                peak_tip_speed=float(np.max(speed)), overshoot_deg=overshoot, band_deg=band,
+                scheme=scheme)
 
 
-def _crossing(time, d, i):
-    """The time where d (|tip - reference| - band) crosses zero between steps i and i + 1
-    (linear interpolation)."""
-    return time[i] + (time[i + 1] - time[i]) * d[i] / (d[i] - d[i + 1])
+def band_times(time, angle, start, rest, band):
+    """(leave, arrive, settle) of the module docstring from samples ``angle`` (degrees) at
+    ``time`` (the start at index 0), each where the distance to the band's edge crosses zero
+    between two samples (linear interpolation); NaN where the motion does not do it (never
+    leaves, never arrives, or is outside the band at the end). Pure jnp: host arrays and
+    traced ones alike."""
+    time, angle = jnp.asarray(time), jnp.asarray(angle)
+    n = angle.shape[0]
+
+    def cross(d, k):  # between samples k - 1 and k
+        k = jnp.clip(k, 1, n - 1)
+        return time[k - 1] + (time[k] - time[k - 1]) * d[k - 1] / (d[k - 1] - d[k])
+
+    away = jnp.abs(angle - start) - band
+    i = jnp.argmax(away > 0)
+    left = jnp.any(away > 0)
+    off = jnp.abs(angle - rest) - band
+    inside = (off <= 0) & (jnp.arange(n) >= i)
+    j = jnp.argmax(inside)
+    last_off = n - 1 - jnp.argmax(off[::-1] > 0)
+    nan = jnp.nan
+    leave = jnp.where(left, jnp.where(i > 0, cross(away, i), time[0]), nan)
+    arrive = jnp.where(left & jnp.any(inside), jnp.where(j > 0, cross(off, j), time[0]), nan)
+    settle = jnp.where(left & jnp.any(off > 0) & (off[-1] <= 0), cross(off, last_off + 1), nan)
+    return leave, arrive, settle
 
 
 def duration_of(scene: Scene, fold: Fold, damping, t_end: float = 60.0, dt: float = 0.01,
@@ -142,14 +164,11 @@ def duration_of(scene: Scene, fold: Fold, damping, t_end: float = 60.0, dt: floa
     x, value = z[:m], fold.value + z[-1]
     at = scene.replace(fold.vary, value + side * past)
     start = jnp.degrees(tip(scene.replace(fold.vary, value), x, disc)[0])
-    out = _run_bdf(at, disc, x, jnp.zeros(m), dt, steps, (damping, 0.0), None, 0.0, 0.0)
+    out = _run_bdf(at, disc, x, jnp.zeros(m), dt, steps, (damping, None), None, 0.0, 0.0)
     angle, converged = jnp.degrees(out[3]), out[-2]
     time = dt * jnp.arange(0, steps + 1)
     angle = jnp.concatenate([start[None], angle])
-    away = jnp.abs(angle - start) - band
-    i_leave = jnp.argmax(away > 0) - 1
-    off = jnp.abs(angle - angle[-1]) - band
-    i_settle = steps - jnp.argmax(off[::-1] > 0)
-    duration = _crossing(time, off, i_settle) - _crossing(time, away, i_leave)
-    ok = (stats[0] == 1.0) & jnp.all(converged) & jnp.any(away > 0) & (i_settle < steps - 1)
+    leave, _, settle = band_times(time, angle, start, angle[-1], band)
+    duration = settle - leave
+    ok = (stats[0] == 1.0) & jnp.all(converged) & jnp.isfinite(duration)
     return duration, ok
