@@ -100,13 +100,20 @@ def _number(data: dict, key: str, where: str, required: bool = True, default=Non
     v = data[key]
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
         _fail(f"{where}{key}", f"must be a finite number, got {v!r}")
-    lo_hi = SI_LIMITS.get(key)
-    if lo_hi is not None and where != "" and not lo_hi[0] <= abs(v) <= lo_hi[1] \
-            and data.get("_units") == "si":
+    return float(v)
+
+
+def _plausible(table: dict, where: str) -> None:
+    """An SI file's numbers within ``SI_LIMITS`` (a 30 T field, a 3 km rod: a unit slip);
+    entries that are not finite numbers are left to ``_number``."""
+    for key, v in table.items():
+        lo_hi = SI_LIMITS.get(key)
+        if lo_hi is None or isinstance(v, bool) or not isinstance(v, (int, float)) \
+                or not math.isfinite(v) or lo_hi[0] <= abs(v) <= lo_hi[1]:
+            continue
         _fail(f"{where}{key}", f"{v:g} {lo_hi[2]} is outside the plausible {lo_hi[0]:g} to "
                                f"{lo_hi[1]:g} {lo_hi[2]}: a unit slip? (SI units; or set "
                                "units = \"nondimensional\")")
-    return float(v)
 
 
 def _vector(data: dict, key: str, where: str, default):
@@ -227,7 +234,9 @@ def scene_from(data: dict) -> FileScene:
         for key in table:
             if key not in TABLES[name][system]:
                 _unknown(f"{name}.", key, TABLES[name][system])
-        tables[name] = dict(table, _units=system)
+        if si:
+            _plausible(table, f"{name}.")
+        tables[name] = table
     fields = data.get("field", [])
     if not isinstance(fields, list):
         _fail("field", "must be an array of tables ([[field]])")
@@ -240,6 +249,8 @@ def scene_from(data: dict) -> FileScene:
         for key in field:
             if key not in FIELD_KEYS[field["kind"]][system]:
                 _unknown(f"field.{i}.", key, FIELD_KEYS[field["kind"]][system])
+        if si:
+            _plausible(field, f"field.{i}.")
     rod = tables["rod"]
     support = rod.get("support", "clamped")
     if support not in ("clamped", "pinned"):
@@ -280,7 +291,6 @@ def scene_from(data: dict) -> FileScene:
     for i, field in enumerate(fields):
         where = f"field.{i}."
         fkind = field["kind"]
-        field = dict(field, _units=system)
         name = f"field{i}"
         angle = math.radians(_number(field, "angle_deg", where, required=False, default=0.0))
         if fkind == "uniform":
