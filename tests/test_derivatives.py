@@ -129,7 +129,7 @@ def test_fold_coefficients_from_the_moore_spence_jacobian():
     """dF/dlam and d2F/dq2 read off the Jacobian Newton ends with (no new assembly) equal
     those assembled afresh at the fold (D^3E[phi] by a tangent of the Hessian)."""
     from jaxrod.magnet.diagram import trace_diagram
-    from jaxrod.solvers.folds import coefficients_at_fold, fold_coefficients, moore_spence_solve
+    from jaxrod.solvers.folds import fold_coefficients, moore_spence_solve
 
     model, args, _ = CASES["magnet planar"]
     disc = args[1]
@@ -140,7 +140,8 @@ def test_fold_coefficients_from_the_moore_spence_jacobian():
     fp = jax.jit(lambda x, a, p: moore_spence_solve(model, x, a, p, args))(
         jnp.asarray(branch.theta[i]), branch.alpha[i], jnp.linalg.eigh(H)[1][:, 0])
     assert bool(fp.newton.converged)
-    from_jacobian = coefficients_at_fold(fp.newton.jacobian, fp.null_vector, disc.mean)
+    from_jacobian = fold_coefficients(None, fp.x, fp.lam, fp.null_vector, args, disc.mean,
+                                      jacobian=fp.newton.jacobian)
     assembled = fold_coefficients(model, fp.x, fp.lam, fp.null_vector, args, disc.mean)
     for a, b in zip(from_jacobian, assembled):
         np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)

@@ -27,7 +27,7 @@ from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional
 from jaxrod.equilibria.record import Branch, SpecialPoint, checked
 from jaxrod.programs import jit
 from jaxrod.scenes.scene import Input, Scene
-from jaxrod.solvers.folds import coefficients_at_fold, moore_spence_solve
+from jaxrod.solvers.folds import fold_coefficients, moore_spence_solve
 from jaxrod.status import Status
 
 
@@ -49,8 +49,8 @@ def _refine_one(x0, lam0, scene, disc, origin, span, vary):
     args = (scene, disc, origin, span)
     phi0 = jnp.linalg.eigh(model.hessian(x0, lam0, args))[1][:, 0]
     fp = moore_spence_solve(model, x0, lam0, phi0, args)
-    d_lam, d_qq, phi_q = coefficients_at_fold(fp.newton.jacobian, fp.null_vector,
-                                              mean_functional(disc))
+    d_lam, d_qq, phi_q = fold_coefficients(None, fp.x, fp.lam, fp.null_vector, args,
+                                           mean_functional(disc), jacobian=fp.newton.jacobian)
     angle, X = tip(scene.replace(vary, origin + span * fp.lam), fp.x, disc)
     return fp, (d_lam / span, d_qq, mean_functional(disc)(fp.x), angle, X, phi_q)
 

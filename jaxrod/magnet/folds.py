@@ -20,10 +20,11 @@ from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle, tip_posit
 from jaxrod.solvers.continuation import continuation_run
 from jaxrod.solvers.folds import (
     FoldPoint,
-    coefficients_at_fold,
     differentiable_fold,
+    fold_coefficients,
     moore_spence_solve,
 )
+from jaxrod.status import SolverError, Status
 from jaxrod.stored import StoredProgram
 
 
@@ -69,7 +70,8 @@ def _fold_report(fp: FoldPoint, disc: PlanarDiscretisation):
     """The normal form and stability data of a converged fold, from its Moore-Spence
     Jacobian (no new assembly)."""
     x, J = fp.x, fp.newton.jacobian
-    d_alpha, d_qq, phi_q = coefficients_at_fold(J, fp.null_vector, disc.mean)
+    d_alpha, d_qq, phi_q = fold_coefficients(None, x, fp.lam, fp.null_vector, None, disc.mean,
+                                             jacobian=J)
     c = -d_qq / (2.0 * d_alpha)
     X = tip_position(x, disc)
     V = jax.jvp(lambda th: tip_position(th, disc), (x,), (phi_q,))[1]
@@ -170,15 +172,19 @@ def _fold_angles_program(G, M, D, n: int, tol: float):
     return jnp.where(converged, alphas, jnp.nan), converged
 
 
-def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13):
+def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13, throw: bool = False):
     """Fast path to (alpha_lower, alpha_upper) in degrees, and whether both converged.
 
     One compiled call of ``fold_angles``: continuation from the straight rod towards
     alpha > 0 that stops after the second fold, then both Moore-Spence solves (vmapped).
     N = 12 reaches the round-off floor at the paper's parameters (use ``locate_folds`` for
-    the full report and diagram).
+    the full report and diagram). ``throw``: raise ``SolverError`` (NOT_CONVERGED) instead
+    of returning NaN angles with False.
     """
     alphas, converged = fold_angles(scene.G, scene.M, scene.D, n=n, tol=tol)
+    if throw and not bool(converged):
+        raise SolverError(Status.NOT_CONVERGED, "fold_pair: no two converged folds in (0, 90] "
+                          "degrees")
     return np.degrees(np.asarray(alphas)), bool(converged)
 
 
@@ -223,6 +229,10 @@ class FoldReport:
             and not self.problems
 
     @property
+    def status(self) -> Status:
+        return Status.SUCCESS if self.converged else Status.NOT_CONVERGED
+
+    @property
     def hysteresis_width_deg(self) -> float | None:
         kinds = {f.kind: f for f in self.folds}
         if "lower" in kinds and "upper" in kinds:
@@ -237,7 +247,7 @@ class FoldReport:
 
 
 def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None = None,
-                 tol: float = 1e-13) -> FoldReport:
+                 tol: float = 1e-13, throw: bool = False) -> FoldReport:
     """Detect the folds on the diagram and refine those with alpha > 0.
 
     The two folds with alpha > 0 are named by their angle: ``upper`` (the engaged branch
@@ -248,6 +258,9 @@ def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None 
     A fold solves grad E = 0, H phi = 0, l . phi = 1 (Moore-Spence) with dF/dalpha != 0 and
     d2F/dq2 != 0. Paper: Proposition ``thm:planar_fold``, Corollary ``cor:tip_angle_fold``;
     the numbers of Corollary ``cor:permanent_physical_parameters``.
+
+    ``throw``: raise ``SolverError`` (NOT_CONVERGED, naming the problems) where the report
+    is not converged (default: the report says so, ``converged`` and ``status``).
     """
     disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     given = branch is not None
@@ -259,6 +272,12 @@ def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None 
             break
         options = options._replace(ds_max=0.2 * options.ds_max, max_points=2 * options.max_points)
         report = _folds_on(scene, disc, trace_diagram(scene, n, options), n, tol)
+    if throw and not report.converged:
+        bad = [f.kind for f in report.folds if not f.converged]
+        why = list(report.problems) + ([f"fold(s) {', '.join(bad)} not converged"] if bad
+                                       else []) + ([] if report.branch.complete else
+                                                   ["the diagram did not reach its end"])
+        raise SolverError(Status.NOT_CONVERGED, "locate_folds: " + "; ".join(why))
     return report
 
 

@@ -22,6 +22,7 @@ from jaxrod.params import check, check_degree
 from jaxrod.programs import jit
 from jaxrod.progress import Interrupted
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
+from jaxrod.status import SolverError, Status
 
 
 @jit
@@ -35,7 +36,7 @@ SWEEP_CHUNK = 256
 
 
 def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: float = 50.0,
-                     step_deg: float = 0.25, progress=None) -> dict:
+                     step_deg: float = 0.25, progress=None, throw: bool = False) -> dict:
     """The experiment's protocol: alpha from -alpha_max to +alpha_max (clockwise), then back.
 
     At each magnet position the previous state is continued by Newton; when it no longer
@@ -47,7 +48,8 @@ def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: flo
     The positions run in compiled chunks of ``SWEEP_CHUNK`` (one program for every chunk);
     ``progress(done, total)`` is called after each. Ctrl-C raises
     ``jaxrod.progress.Interrupted`` whose ``partial`` is this dict for the positions done
-    (``complete`` False, ``reason`` saying where).
+    (``complete`` False, ``reason`` saying where). ``throw``: raise ``SolverError``
+    (NOT_CONVERGED) if a step did not converge (default: ``converged`` False in the dict).
 
     Paper: the loop of eq. ``intro-hysteresis`` and Theorem ``thm:permanent_physical``
     (capture at the lower fold, release at the upper).
@@ -74,7 +76,10 @@ def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: flo
         raise Interrupted(_sweep_result(alphas[:done], up.size, parts, start, scene, disc,
                                         f"interrupted (Ctrl-C) after {done} of {alphas.size} "
                                         "magnet positions"), "sweep") from None
-    return _sweep_result(alphas, up.size, parts, start, scene, disc, None)
+    result = _sweep_result(alphas, up.size, parts, start, scene, disc, None)
+    if throw and not result["converged"]:
+        raise SolverError(Status.NOT_CONVERGED, "hysteresis_sweep: a step did not converge")
+    return result
 
 
 def _sweep_result(alphas, n_up, parts, start, scene, disc, reason) -> dict:

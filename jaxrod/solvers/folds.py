@@ -168,7 +168,7 @@ def moore_spence_solve(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13)
     """Solve the Moore-Spence system from (x0, lam0) and null-vector guess phi0 (traceable).
 
     The returned ``null_vector`` is normalised by l . phi = 1 with l = phi0 / |phi0|^2;
-    ``newton.jacobian`` is the system's Jacobian at the fold (``coefficients_at_fold``).
+    ``newton.jacobian`` is the system's Jacobian at the fold (``fold_coefficients``).
     """
     return _solve_fold(energy, x0, lam0, phi0, args, tol)
 
@@ -189,22 +189,21 @@ def differentiable_fold(energy: Energy, x0, lam0, phi0, args, tol: float = 1e-13
                            linearise=lambda z, p: moore_spence_linearisation(z, (energy, *p)))
 
 
-def coefficients_at_fold(jacobian, phi, mean: Callable[[jax.Array], Any]):
-    """(dF/dlam, d2F/dq2, phi normalised by mean(phi) = 1) from the Moore-Spence Jacobian at
-    a converged fold (its blocks F_lam and D^3E[phi]; phi the null vector it was taken at):
-    no new assembly of the energy's derivatives."""
+def fold_coefficients(energy: Energy | None, x, lam, phi, args,
+                      mean: Callable[[jax.Array], Any], jacobian=None):
+    """(dF/dlam, d2F/dq2, phi normalised by mean(phi) = 1) at a converged fold: the reduced
+    coefficients of its normal form F(q, lam) = dF/dlam (lam - lam*) + d2F/dq2 q^2 / 2
+    projected on the null vector phi, dF/dlam = phi . dgradE/dlam and
+    d2F/dq2 = D^3E[phi, phi, phi]. With the Moore-Spence ``jacobian`` at the fold (its blocks
+    are F_lam and D^3E[phi], phi the null vector it was taken at) they are read off it, with
+    no new assembly (``energy``, ``x``, ``lam`` and ``args`` then unused); else assembled."""
     m = phi.shape[0]
     scale = mean(phi)
     phi_q = phi / scale
-    d_lam = jnp.dot(jacobian[:m, 2 * m], phi_q)
-    d3 = phi_q @ jacobian[m:2 * m, :m] @ phi_q / scale  # D^3E is linear in phi
-    return d_lam, d3, phi_q
-
-
-def fold_coefficients(energy: Energy, x, lam, phi, args, mean: Callable[[jax.Array], Any]):
-    """(dF/dlam, d2F/dq2, phi normalised by mean(phi) = 1) at a converged fold."""
+    if jacobian is not None:
+        d_lam = jnp.dot(jacobian[:m, 2 * m], phi_q)
+        d3 = phi_q @ jacobian[m:2 * m, :m] @ phi_q / scale  # D^3E is linear in phi
+        return d_lam, d3, phi_q
     model = as_model(energy)
-    phi = phi / mean(phi)
-    d_lam = jnp.dot(model.gradient_lam(x, lam, args), phi)
-    d3 = phi @ model.third(x, lam, args, phi) @ phi
-    return d_lam, d3, phi
+    d_lam = jnp.dot(model.gradient_lam(x, lam, args), phi_q)
+    return d_lam, phi_q @ model.third(x, lam, args, phi_q) @ phi_q, phi_q
