@@ -9,8 +9,10 @@ change of the machine's load hits both. No persistent compilation cache anywhere
 compile times are what a first run pays; the command line's warm-cache process is measured
 separately, with a cache of its own per tree).
 
-Run:  python benchmarks/against_last_release.py [--release REV] [--repeats 3]
-Writes benchmarks/results/against_last_release.{json,md}.
+Run:  python benchmarks/against_last_release.py [--release REV] [--repeats 3] [--name NAME]
+Writes benchmarks/results/NAME.{json,md} (default against_last_release; the every-rig work
+against the tree that closed the one-engine work: --release 5a545fa --name
+against_one_engine).
 """
 
 from __future__ import annotations
@@ -142,7 +144,7 @@ def run(release: str, repeats: int) -> dict:
 
 def markdown(res: dict, machine: str) -> str:
     new, old = res["labels"]
-    lines = ["# This tree against the last release", "", f"Machine: {machine}. Each number the "
+    lines = [f"# This tree against {old}", "", f"Machine: {machine}. Each number the "
              f"best of {res['repeats']} fresh processes; no persistent compilation cache.", "",
              f"| entry point | compile s ({new}) | compile s ({old}) | ratio | warm s ({new}) "
              f"| warm s ({old}) |", "|---|---|---|---|---|---|"]
@@ -170,14 +172,17 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--release", default=LAST_RELEASE)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--name", default="against_last_release",
+                    help="the results' file name (another for another --release: "
+                    "against_one_engine for the tree that closed the one-engine work)")
     args = ap.parse_args()
     res = run(args.release, args.repeats)
     import platform
 
     machine = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores"
     out = HERE / "results"
-    (out / "against_last_release.json").write_text(json.dumps(res, indent=1))
-    (out / "against_last_release.md").write_text(markdown(res, machine))
+    (out / f"{args.name}.json").write_text(json.dumps(res, indent=1))
+    (out / f"{args.name}.md").write_text(markdown(res, machine))
     print(markdown(res, machine))
 
 

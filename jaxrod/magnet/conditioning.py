@@ -26,7 +26,7 @@ from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.magnet.reduction import ReducedFold, reduced_function, reduced_state, reduction
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet
-from jaxrod.solvers.folds import moore_spence_residual
+from jaxrod.solvers.folds import moore_spence_linearisation
 from jaxrod.solvers.newton import newton
 
 
@@ -46,7 +46,7 @@ def _condition_numbers(q, alpha, red, scene, disc):
     phi = jnp.linalg.eigh(H)[1][:, 0]
     ell = phi / jnp.dot(phi, phi)
     z = jnp.concatenate([theta, phi, jnp.atleast_1d(alpha)])
-    ms = jax.jacfwd(moore_spence_residual)(z, (_energy, ell, args))
+    ms = moore_spence_linearisation(z, (_energy, ell, args))[1]
     fold_system = lambda x: jnp.stack([
         reduced_function(x[0], x[1], red, scene, disc),
         jax.grad(reduced_function)(x[0], x[1], red, scene, disc)])
