@@ -34,10 +34,24 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
+
+
+class FoldJet(NamedTuple):
+    """The blocks of the Moore-Spence Jacobian at (x, lam) and null-vector estimate phi:
+    F = grad E, H = Hess E, F_lam = d/dlam grad E, third = D^3E[phi], Hphi_lam = (H phi)_lam,
+    and with a second parameter u, F_u and Hphi_u (``EnergyModel.fold_blocks``)."""
+
+    F: jax.Array
+    H: jax.Array
+    F_lam: jax.Array
+    third: jax.Array
+    Hphi_lam: jax.Array
+    F_u: jax.Array | None = None
+    Hphi_u: jax.Array | None = None
 
 
 class EnergyModel:
@@ -82,17 +96,30 @@ class EnergyModel:
         _, H, F_lam = self.linearisation(x, lam, args)
         return H, F_lam
 
-    def fold_blocks(self, x, lam, args, phi):
-        """(grad E, H, F_lam, D^3E[phi], (H phi)_lam): the Moore-Spence residual's gradient
-        block and its Jacobian's blocks, from one assembly of (grad E, Hess E) and two
-        tangents (phi, 0) and (0, 1) of it."""
+    def fold_blocks(self, x, lam, args, phi, second=None) -> FoldJet:
+        """The Moore-Spence residual's gradient block and its Jacobian's blocks at (x, lam)
+        with null-vector estimate phi (``FoldJet``), from one assembly of (grad E, Hess E)
+        and its forward tangents along (phi, 0) and (0, 1) in (x, lam). With ``second =
+        (args_at, u)``, a second parameter u entering the energy as ``args_at(u, args)``,
+        a third tangent (0, 0, 1) in (x, lam, u) adds the u column (F_u, (H phi)_u) of the
+        fold-curve system. The one assembly of the fold Jacobian: ``jaxrod.solvers.folds``
+        lays it out, the fold curves and the reduced jet read it."""
         lam = jnp.asarray(lam, x.dtype)
-        pair = lambda z, l: self.gradient_and_hessian(z, l, args)
-        tx = jnp.stack([phi, jnp.zeros_like(phi)])
-        tl = jnp.array([0.0, 1.0], x.dtype)
-        (F, H), (dg, dH) = jax.vmap(lambda a, b: jax.jvp(pair, (x, lam), (a, b)),
-                                    out_axes=(None, 0))(tx, tl)
-        return F, H, dg[1], dH[0], dH[1] @ phi
+        zero = jnp.zeros_like(phi)
+        if second is None:
+            pair = lambda z, l: self.gradient_and_hessian(z, l, args)
+            primals, tangents = (x, lam), (jnp.stack([phi, zero]), jnp.array([0.0, 1.0], x.dtype))
+        else:
+            args_at, u = second
+            pair = lambda z, l, v: self.gradient_and_hessian(z, l, args_at(v, args))
+            eye = jnp.eye(3, dtype=x.dtype)
+            primals = (x, lam, jnp.asarray(u, x.dtype))
+            tangents = (jnp.stack([phi, zero, zero]), eye[1], eye[2])
+        (F, H), (dg, dH) = jax.vmap(lambda *t: jax.jvp(pair, primals, t),
+                                    out_axes=(None, 0))(*tangents)
+        if second is None:
+            return FoldJet(F, H, dg[1], dH[0], dH[1] @ phi)
+        return FoldJet(F, H, dg[1], dH[0], dH[1] @ phi, dg[2], dH[2] @ phi)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -3,6 +3,8 @@ scene's whole energy (``scene.energy``, built from the energy terms): energy, gr
 Hessian, D^3E[phi], and the parameter derivatives, to round-off."""
 
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -15,6 +17,7 @@ from jaxrod.programs import jit
 from jaxrod.scenes import DipoleMagnet, UniformField
 from jaxrod.scenes.dipole import ALPHA_MODEL
 from jaxrod.scenes.three_d import DipoleMagnet3D, UniformField3D, magnet_position
+from jaxrod.solvers.fold_curve import fold_linearisation
 from jaxrod.solvers.folds import moore_spence_linearisation, moore_spence_residual
 
 D_EXP = 11.25 / 9.2
@@ -77,7 +80,7 @@ def _both(model, reference, x, phi, lam, args):
     """Each quantity assembled and by plain autodiff of the whole energy, in one program."""
     E = reference.fn
     hess = lambda z, l: jax.hessian(E)(z, l, args)
-    F, H, g_lam, T, Hphi_lam = model.fold_blocks(x, lam, args, phi)
+    F, H, g_lam, T, Hphi_lam, _, _ = model.fold_blocks(x, lam, args, phi)
     F_lin, H_lin, g_lam_lin = model.linearisation(x, lam, args)
     return {
         "energy": (model.energy(x, lam, args), E(x, lam, args)),
@@ -121,6 +124,32 @@ def test_moore_spence_linearisation_is_the_residual_and_its_jacobian():
         moore_spence_linearisation(z, (model, ell, args)),
         (moore_spence_residual(z, plain), jax.jacfwd(moore_spence_residual)(z, plain))))
     (R, J), (R_ref, J_ref) = both(z, data[1], args)
+    np.testing.assert_allclose(R, R_ref, atol=1e-13)
+    np.testing.assert_allclose(J, J_ref, atol=1e-12)
+
+
+def _with_D(D, args):
+    """The dipole scene with its clearance D as the second parameter of a fold curve."""
+    scene, disc = args
+    return dataclasses.replace(scene, D=D), disc
+
+
+def test_fold_curve_jacobian_is_the_residual_and_its_jacobian_in_both_parameters():
+    """The fold-curve system's Jacobian (one assembly, with the second parameter's column)
+    against forward-mode autodiff of the plain Moore-Spence residual in (x, phi, lam, u)."""
+    model, args, lam = CASES["magnet planar"]
+    m = args[1].size
+    w = jnp.concatenate([_state(m, 0.3), _state(m, 1.0, 0.4), jnp.array([lam, 1.15])])
+    ell = _state(m, 1.0, 0.9)
+
+    def plain(w):
+        return moore_spence_residual(w[:-1], (Autodiff(_magnet_energy), ell,
+                                              _with_D(w[-1], args)))
+
+    both = jit(lambda w, ell, args: (fold_linearisation(w, ell, model, _with_D, args),
+                                     (plain(w), jax.jacfwd(plain)(w))))
+    (R, J), (R_ref, J_ref) = both(w, ell, args)
+    assert J.shape == (2 * m + 1, 2 * m + 2)
     np.testing.assert_allclose(R, R_ref, atol=1e-13)
     np.testing.assert_allclose(J, J_ref, atol=1e-12)
 

@@ -193,11 +193,11 @@ def _jet(theta, xi, theta_alpha, alpha, red: Reduction, scene, disc):
     with g = grad E, H = Hess E. The terms with d_q xi and d_alpha xi drop out because they
     lie in Y and H xi is orthogonal to Y (one assembly of the Hessian, two tangents of it)."""
     args = (scene, disc)
-    g, H, g_alpha, T, Hxi_alpha = ALPHA_MODEL.fold_blocks(theta, alpha, args, xi)
-    Txi = T @ xi
-    return jnp.stack([jnp.dot(red.psi, g), xi @ H @ xi,
-                      jnp.dot(red.psi, H @ theta_alpha + g_alpha), jnp.dot(Txi, xi),
-                      jnp.dot(Txi, theta_alpha) + jnp.dot(xi, Hxi_alpha)])
+    b = ALPHA_MODEL.fold_blocks(theta, alpha, args, xi)
+    Txi = b.third @ xi
+    return jnp.stack([jnp.dot(red.psi, b.F), xi @ b.H @ xi,
+                      jnp.dot(red.psi, b.H @ theta_alpha + b.F_lam), jnp.dot(Txi, xi),
+                      jnp.dot(Txi, theta_alpha) + jnp.dot(xi, b.Hphi_lam)])
 
 
 def _state_derivatives(theta, alpha, red: Reduction, scene, disc):

@@ -62,7 +62,7 @@ from jaxrod.solvers.continuation import (
     RUNNING,
     STATUS_MESSAGES,
 )
-from jaxrod.solvers.folds import moore_spence_residual
+from jaxrod.solvers.folds import moore_spence_residual, moore_spence_system
 from jaxrod.solvers.newton import implicit_newton, newton
 from jaxrod.status import Status
 
@@ -124,20 +124,12 @@ def fold_linearisation(w, ell, model: EnergyModel, args_at: ArgsMap, args):
         [ 0          l^T  0             0          ],
 
     from one assembly of the Hessian and gradient and three tangents of them, along
-    (phi, 0, 0), (0, 1, 0) and (0, 0, 1) in (x, lam, u)."""
+    (phi, 0, 0), (0, 1, 0) and (0, 0, 1) in (x, lam, u) (``EnergyModel.fold_blocks`` with
+    the second parameter, laid out by ``moore_spence_system``)."""
     m = ell.shape[0]
     x, phi, lam, u = split(w, m)
-    pair = lambda y, l, v: model.gradient_and_hessian(y, l, args_at(v, args))
-    zero = jnp.zeros_like(phi)
-    tx = jnp.stack([phi, zero, zero])
-    tl = jnp.array([0.0, 1.0, 0.0], w.dtype)
-    tu = jnp.array([0.0, 0.0, 1.0], w.dtype)
-    (F, H), (dF, dH) = jax.vmap(lambda a, b, c: jax.jvp(pair, (x, lam, u), (a, b, c)),
-                                out_axes=(None, 0))(tx, tl, tu)
-    R = jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
-    top = jnp.hstack([H, jnp.zeros_like(H), dF[1][:, None], dF[2][:, None]])
-    mid = jnp.hstack([dH[0], H, (dH[1] @ phi)[:, None], (dH[2] @ phi)[:, None]])
-    return R, jnp.vstack([top, mid, _ell_row(ell)[None, :]])
+    return moore_spence_system(model.fold_blocks(x, lam, args, phi, second=(args_at, u)), phi,
+                               ell)
 
 
 def _ell_row(ell):

@@ -32,7 +32,7 @@ from typing import Any, NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxrod.derivatives import EnergyModel, as_model
+from jaxrod.derivatives import EnergyModel, FoldJet, as_model
 from jaxrod.solvers import dense
 from jaxrod.solvers.newton import NewtonResult, implicit_newton, newton
 
@@ -61,6 +61,28 @@ def moore_spence_residual(z, data):
     return jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
 
 
+def moore_spence_system(blocks: FoldJet, phi, ell):
+    """(R, J): the Moore-Spence residual [F; H phi; l . phi - 1] and its Jacobian, laid out
+    from the blocks of ``EnergyModel.fold_blocks`` at the null-vector estimate phi:
+
+        [ H          0    F_lam        (F_u)       ]
+        [ D^3E[phi]  H    (H phi)_lam  ((H phi)_u) ]
+        [ 0          l^T  0            (0)         ],
+
+    with the u column where the blocks carry a second parameter (the fold-curve system)."""
+    H = blocks.H
+    m = H.shape[0]
+    columns = [(blocks.F_lam, blocks.Hphi_lam)]
+    if blocks.F_u is not None:
+        columns.append((blocks.F_u, blocks.Hphi_u))
+    top = jnp.hstack([H, jnp.zeros_like(H), *[f[:, None] for f, _ in columns]])
+    mid = jnp.hstack([blocks.third, H, *[h[:, None] for _, h in columns]])
+    bottom = jnp.concatenate([jnp.zeros(m, H.dtype), ell,
+                              jnp.zeros(len(columns), H.dtype)])[None, :]
+    R = jnp.concatenate([blocks.F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
+    return R, jnp.vstack([top, mid, bottom])
+
+
 def moore_spence_linearisation(z, data):
     """(``moore_spence_residual``, its exact Jacobian in z) from one assembly of the
     Hessian's blocks (module docstring)."""
@@ -68,13 +90,7 @@ def moore_spence_linearisation(z, data):
     model = as_model(energy)
     m = ell.shape[0]
     x, phi, lam = z[:m], z[m:2 * m], z[-1]
-    F, H, g_lam, T, Hphi_lam = model.fold_blocks(x, lam, args, phi)
-    R = jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
-    zero = jnp.zeros_like(H)
-    top = jnp.hstack([H, zero, g_lam[:, None]])
-    mid = jnp.hstack([T, H, Hphi_lam[:, None]])
-    bottom = jnp.concatenate([jnp.zeros(m, H.dtype), ell, jnp.zeros(1, H.dtype)])[None, :]
-    return R, jnp.vstack([top, mid, bottom])
+    return moore_spence_system(model.fold_blocks(x, lam, args, phi), phi, ell)
 
 
 class FoldBlocks(NamedTuple):
