@@ -3,8 +3,10 @@ number of tests, and the time of the tests both trees have (matched by their pyt
 so that new tests and a slower engine are told apart.
 
 The release is taken from git (``--release REV``, default the tree that closed the one-engine
-work) into a temporary directory. Each suite runs as the README says (``python -m pytest``,
-one xdist worker per core), in its own tree, with that tree's package first on the path and a
+work) into a temporary directory, and this tree likewise (its last commit: edits that are not
+committed are not measured, and the working tree may change while the suites run). Each
+suite runs as the README says (``python -m pytest``, one xdist worker per core), in its own
+tree, with that tree's package first on the path and a
 fresh compilation cache; the release first, then this tree. Per-test times come from
 pytest's JUnit XML (call time with its setup and teardown, summed over the workers: work, not
 wall time).
@@ -44,6 +46,11 @@ def export_tree(rev: str, into: Path) -> Path:
     with tarfile.open(fileobj=io.BytesIO(data)) as tar:
         tar.extractall(into, filter="data")
     return into
+
+
+def _short(rev: str) -> str:
+    return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", rev], check=True,
+                          capture_output=True, text=True).stdout.strip()
 
 
 def per_test_times(junit: Path) -> dict[str, dict]:
@@ -88,9 +95,10 @@ def run(release: str) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         old = export_tree(release, work / "release")
-        res = {"release": release,
+        this = export_tree("HEAD", work / "this-tree")
+        res = {"release": release, "this": _short("HEAD"),
                "release_suite": run_suite(old, work, "release"),
-               "this_suite": run_suite(ROOT, work, "this")}
+               "this_suite": run_suite(this, work, "this")}
     a, b = res["release_suite"]["times"], res["this_suite"]["times"]
     common = sorted(set(a) & set(b))
     res["common"] = {"tests": len(common),
@@ -112,7 +120,7 @@ def markdown(res: dict, machine: str) -> str:
     n = lambda s: sum(s["counts"].values())
     bad = lambda s: s["counts"].get("failed", 0) + s["counts"].get("error", 0)
     c, only = res["common"], res["only_this"]
-    lines = [f"# The test suite: this tree against release {rel}", "",
+    lines = [f"# The test suite: this tree ({res['this']}) against release {rel}", "",
              f"Machine: {machine}. One run of each suite (`python -m pytest`, one worker per "
              "core), the release first; per-test times are pytest's (setup, call and "
              "teardown), summed over the workers.", "",
