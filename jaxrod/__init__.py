@@ -86,6 +86,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "fit_folds": ("jaxrod.inverse.scene_fit", "fit_folds"),
         "design_folds": ("jaxrod.inverse.scene_fit", "design_folds"),
         "fold_map": ("jaxrod.bistability.fold_map", "fold_map"),
+        "read_fold_map": ("jaxrod.bistability.fold_map", "read_fold_map"),
         "Status": ("jaxrod.status", "Status"),
         "SolverError": ("jaxrod.status", "SolverError"),
     },

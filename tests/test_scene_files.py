@@ -383,8 +383,9 @@ def test_cli_foldcurve_on_a_scene_file_passes_the_cusp_of_the_pitchfork():
 
 
 def test_cli_map_on_a_scene_file(tmp_path):
-    """The rail's folds on a 2 x 2 grid of the magnet's strength and height: map.json and
-    map.png; a point's fold count and first fold as jr.scene_folds gives them there."""
+    """The rail's folds on a 2 x 2 grid of the magnet's strength and height: map.json, map.png
+    and the store map.zarr; a point's fold count and first fold as jr.scene_folds gives them
+    there."""
     path = tmp_path / "rail.toml"
     path.write_text(RAIL)
     out_dir = tmp_path / "map"
@@ -400,6 +401,17 @@ def test_cli_map_on_a_scene_file(tmp_path):
     assert data["count"][0][1] == len(folds) == 2
     assert abs(data["first"][0][1] - folds[0].value / factor) <= 1e-9
     assert data["count"][1][0] == 0  # higher and weaker: no loop
+    # the map's store: read back as the map, and the same command again resumes it (nothing
+    # left to compute) to the same map.json
+    from jaxrod.bistability.fold_map import read_fold_map
+
+    stored = read_fold_map(out_dir / "map.zarr")
+    assert stored.count.tolist() == data["count"]
+    again = _cli("map", str(path), "--vary", "field.0.position.0", "--from", "0", "--to",
+                 "1.5", "--x", "field.0.M:0.15:0.25:2", "--y", "field.0.position.1:1.2:1.35:2",
+                 "--out", str(out_dir), "--json")
+    assert again.returncode == 0, again.stderr
+    assert json.loads((out_dir / "map.json").read_text()) == data
 
 
 def test_a_rail_at_any_angle_is_a_load_path(tmp_path):

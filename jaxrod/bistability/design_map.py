@@ -22,39 +22,34 @@ straight rod has fewer than two folds with alpha in (0, 180] degrees), FOLD_BEYO
 leaves alpha in (0, 90]: the experiment's magnet cannot reach it), INVALID_INPUT (the magnet
 would touch the rod, or an input is not positive) or NOT_CONVERGED; angles are NaN unless OK.
 
-The grid is written chunk by chunk as a Zarr (version 2) store, written with numpy alone
-(raw little-endian chunks, no compressor), which xarray opens with ``xarray.open_zarr``
-(``pip install 'jaxrod[maps]'``): variables ``capture_deg`` (the lower fold: the magnet
-angle where the disengaged rod is captured), ``release_deg`` (the upper fold),
-``width_deg`` and ``reason`` on dimensions named by the two inputs (y first), coordinates
-with units, provenance attributes and consolidated metadata (``.zmetadata``); ``reason`` is
--1 (``NOT_COMPUTED``, outside the codes) where a chunk was not written yet. A
-chunk is complete when its ``reason`` file exists (written last, atomically): a killed run
-started again with the same arguments skips the complete chunks and loses nothing.
+The grid is written chunk by chunk into a store of ``jaxrod.bistability.grid_store`` (Zarr
+version 2, written with numpy; ``xarray.open_zarr`` reads it): variables ``capture_deg`` (the
+lower fold: the magnet angle where the disengaged rod is captured), ``release_deg`` (the upper
+fold), ``width_deg`` and ``reason`` on dimensions named by the two inputs (y first), with
+units and provenance attributes; ``reason`` is -1 (``NOT_COMPUTED``, outside the codes) where
+a chunk was not written yet. A killed run started again with the same arguments skips the
+complete chunks and loses nothing.
 
 Scale-out uses JAX's own machinery: a chunk's points are laid out over all local devices
 with a ``jax.sharding.NamedSharding`` (one mesh axis, the points) and ``jax.shard_map`` runs
 the batched program on each device's share independently (the retry tiers, a small share
-of a map, run on the first device); with ``jax.distributed`` initialised, process p of P
-computes and writes the chunks whose index is p modulo P (the store's metadata is written
-by every process, identically).
+of a map, run on the first device); with ``jax.distributed`` initialised, each process computes
+and writes its own share of the chunks (``grid_store``).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import datetime
 import functools
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 
 import jax
 import numpy as np
 
 from jaxrod.bistability.fold_curves import find_cusp, fold_curves
+from jaxrod.bistability.grid_store import NOT_COMPUTED, GridAxis, GridStore, Variable, read
 from jaxrod.design_point import DesignPoint, groups_of, range_of
 from jaxrod.magnet.batch import (  # noqa: F401 (the reason codes, re-exported)
     BISTABLE,
@@ -68,7 +63,6 @@ from jaxrod.magnet.batch import (  # noqa: F401 (the reason codes, re-exported)
 )
 from jaxrod.params import UNITS, ParameterError
 from jaxrod.programs import jit
-from jaxrod.progress import ctrl_c_guard, interrupt_requested, progress_bar
 
 #: The reason codes of a map's points: ``jaxrod.magnet.batch.STATUS`` (OK is BISTABLE).
 OK, REASONS = BISTABLE, STATUS
@@ -197,33 +191,17 @@ def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
             "width_deg": deg[:, 1] - deg[:, 0], "reason": reason}
 
 
-# --- the on-disk store (Zarr version 2, written with numpy) ----------------------------------
+# --- the on-disk store (``jaxrod.bistability.grid_store``) --------------------------------
 
-_DTYPES = {"capture_deg": "<f8", "release_deg": "<f8", "width_deg": "<f8", "reason": "|i1"}
-#: ``reason`` of a point not computed yet (a chunk not written): outside the codes of
-#: ``REASONS``, so that no reader takes a code for a missing value or the reverse.
-NOT_COMPUTED = -1
-_FILL = {"<f8": "NaN", "|i1": NOT_COMPUTED}
 LONG_NAMES = {"capture_deg": "magnet angle of the lower fold (capture of the disengaged rod)",
               "release_deg": "magnet angle of the upper fold (release of the engaged rod)",
               "width_deg": "hysteresis width, release - capture",
               "reason": "0 bistable; 1 not bistable; 2 a fold beyond 90 deg; 3 invalid "
               "input; 4 not converged; -1 not computed (missing chunk)"}
-
-
-def _write_atomic(path: Path, data: bytes) -> None:
-    with tempfile.NamedTemporaryFile(dir=path.parent, delete=False, prefix=".tmp-") as f:
-        f.write(data)
-    os.replace(f.name, path)
-
-
-def _json(path: Path, obj) -> None:
-    _write_atomic(path, json.dumps(obj, indent=1, sort_keys=True).encode())
-
-
-def _array_meta(shape, chunks, dtype, fill):
-    return {"zarr_format": 2, "shape": list(shape), "chunks": list(chunks), "dtype": dtype,
-            "compressor": None, "fill_value": fill, "filters": None, "order": "C"}
+#: The map's variables (``reason`` last: it marks a chunk complete).
+_VARIABLES = {name: Variable("|i1" if name == "reason" else "<f8",
+                             "1" if name == "reason" else "degree", LONG_NAMES[name])
+              for name in VARIABLES}
 
 
 #: The most points of one map: its inputs (up to 9 per point, float64) are laid out in memory
@@ -261,75 +239,24 @@ class MapSpec:
                 "chunk": self.chunk, "n": self.n}
 
 
-def _init_store(out: Path, spec: MapSpec) -> None:
-    """Write the store's metadata (identical from every process); refuse a store made for
-    other arguments (resuming needs the same map)."""
-    out.mkdir(parents=True, exist_ok=True)
-    description = json.dumps(spec.description(), sort_keys=True)
-    root = out / ".zattrs"
-    if root.exists():
-        try:
-            made = json.loads(root.read_text()).get("jaxrod_map")
-        except ValueError:
-            made = None
-        if made != description:
-            raise ParameterError(f"out: {out} holds a map made with other arguments; give a "
-                                 "new directory (or the same arguments to resume it)")
-    else:
-        import importlib.metadata
+def grid_store(out: Path, spec: MapSpec) -> GridStore:
+    """The map's store at ``out`` (``jaxrod.bistability.grid_store``): its variables, axes,
+    chunks, and the description a resumed run must match."""
+    import importlib.metadata
 
-        try:
-            version = importlib.metadata.version("jaxrod")
-        except importlib.metadata.PackageNotFoundError:
-            version = "unknown"
-        fixed = {k: v for k, v in spec.point.as_dict().items()
-                 if k not in (spec.x.name, spec.y.name)}
-        created = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-        _json(out / ".zgroup", {"zarr_format": 2})
-        _json(root, {
-            "title": f"jaxrod bistability map over {spec.x.name} and {spec.y.name}",
-            "source": f"jaxrod {version} (jax {jax.__version__}), N = {spec.n} Chebyshev",
-            "fixed_inputs": json.dumps(fixed), "reason_codes": json.dumps(
-                {str(k): v for k, v in (REASONS | {NOT_COMPUTED: "not computed"}).items()}),
-            "history": "created " + created, "jaxrod_map": description})
-    shape = (spec.y.count, spec.x.count)
-    dims = [spec.y.name, spec.x.name]
-    meta = {".zgroup": {"zarr_format": 2}, ".zattrs": json.loads(root.read_text())}
-    for name in VARIABLES:
-        dtype = _DTYPES[name]
-        meta[f"{name}/.zarray"] = _array_meta(shape, (spec.chunk, spec.chunk), dtype,
-                                              _FILL[dtype])
-        meta[f"{name}/.zattrs"] = {"_ARRAY_DIMENSIONS": dims,
-                                   "units": "1" if name == "reason" else "degree",
-                                   "long_name": LONG_NAMES[name]}
-    for axis in (spec.x, spec.y):
-        meta[f"{axis.name}/.zarray"] = _array_meta((axis.count,), (axis.count,), "<f8", "NaN")
-        meta[f"{axis.name}/.zattrs"] = {"_ARRAY_DIMENSIONS": [axis.name],
-                                        "units": UNITS[axis.name] or "1",
-                                        "long_name": axis.name}
-    for key, value in meta.items():
-        if "/" in key:
-            (out / key).parent.mkdir(exist_ok=True)
-            _json(out / key, value)
-    for axis in (spec.x, spec.y):
-        _write_atomic(out / axis.name / "0", axis.values().astype("<f8").tobytes())
-    # consolidated metadata (``.zmetadata``): readers open the store with one read
-    _json(out / ".zmetadata", {"zarr_consolidated_format": 1, "metadata": meta})
-
-
-def _chunk_done(out: Path, key: str) -> bool:
-    return (out / "reason" / key).exists()
-
-
-def _write_chunk(out: Path, spec: MapSpec, iy: int, ix: int, result: dict) -> None:
-    c = spec.chunk
-    key = f"{iy}.{ix}"
-    for name in VARIABLES:  # reason last: it marks the chunk complete
-        dtype = np.dtype(_DTYPES[name])
-        block = np.full((c, c), NOT_COMPUTED if name == "reason" else np.nan, dtype)
-        part = result[name]
-        block[:part.shape[0], :part.shape[1]] = part
-        _write_atomic(out / name / key, block.tobytes())
+    try:
+        version = importlib.metadata.version("jaxrod")
+    except importlib.metadata.PackageNotFoundError:
+        version = "unknown"
+    fixed = {k: v for k, v in spec.point.as_dict().items()
+             if k not in (spec.x.name, spec.y.name)}
+    attrs = {"title": f"jaxrod bistability map over {spec.x.name} and {spec.y.name}",
+             "source": f"jaxrod {version} (jax {jax.__version__}), N = {spec.n} Chebyshev",
+             "fixed_inputs": json.dumps(fixed), "reason_codes": json.dumps(
+                 {str(k): v for k, v in (REASONS | {NOT_COMPUTED: "not computed"}).items()})}
+    axis = lambda a: GridAxis(a.name, tuple(a.values()), UNITS[a.name] or "1")
+    return GridStore(Path(out), _VARIABLES, axis(spec.x), axis(spec.y), spec.chunk,
+                     json.dumps(spec.description(), sort_keys=True), attrs)
 
 
 STORE = "map.zarr"
@@ -347,30 +274,7 @@ def read_store(out: Path) -> dict[str, np.ndarray]:
     of ``VARIABLES`` (``reason`` NOT_COMPUTED where a chunk was not written), the axes by
     their inputs' names and as ``x`` and ``y``. ``out``: the store, or the folder that holds
     it (``store_path``)."""
-    out = store_path(out)
-    spec = json.loads(json.loads((out / ".zattrs").read_text())["jaxrod_map"])
-    x, y = spec["x"]["name"], spec["y"]["name"]
-    data = {}
-    for name in (x, y, *VARIABLES):
-        meta = json.loads((out / name / ".zarray").read_text())
-        shape, chunks, dtype = meta["shape"], meta["chunks"], np.dtype(meta["dtype"])
-        fill = np.nan if meta["fill_value"] == "NaN" else meta["fill_value"]
-        arr = np.full(shape, fill, dtype)
-        if len(shape) == 1:
-            arr[:] = np.frombuffer((out / name / "0").read_bytes(), dtype)[:shape[0]]
-        else:
-            for iy in range(-(-shape[0] // chunks[0])):
-                for ix in range(-(-shape[1] // chunks[1])):
-                    f = out / name / f"{iy}.{ix}"
-                    if not f.exists():
-                        continue
-                    block = np.frombuffer(f.read_bytes(), dtype).reshape(chunks)
-                    ys, xs = iy * chunks[0], ix * chunks[1]
-                    h, w = min(chunks[0], shape[0] - ys), min(chunks[1], shape[1] - xs)
-                    arr[ys:ys + h, xs:xs + w] = block[:h, :w]
-        data[name] = arr
-    data["x"], data["y"] = data[x], data[y]
-    return data
+    return read(store_path(out))
 
 
 def run_map(spec: MapSpec, out: Path, progress: bool = True, devices=None) -> dict:
@@ -380,28 +284,17 @@ def run_map(spec: MapSpec, out: Path, progress: bool = True, devices=None) -> di
     Paper: the width of eq. ``intro-hysteresis`` over two inputs; the design rule of section
     ``s.discussion``.
     """
-    out = Path(out)
     values = _grid_values(spec.point, spec.x, spec.y)
-    _init_store(out, spec)
-    p, count = jax.process_index(), jax.process_count()
-    mine = [(k, ij) for k, ij in enumerate(spec.chunks()) if k % count == p]
-    todo = [ij for _, ij in mine if not _chunk_done(out, f"{ij[0]}.{ij[1]}")]
-    bar = progress_bar(len(mine), "map", "chunk", progress, len(mine) - len(todo))
-    c = spec.chunk
-    try:
-        with ctrl_c_guard():
-            for iy, ix in todo:
-                block = values[iy * c:(iy + 1) * c, ix * c:(ix + 1) * c]
-                h, w = block.shape[:2]
-                res = solve_points(spec.point, block.reshape(h * w, -1), spec.n, devices)
-                _write_chunk(out, spec, iy, ix, {k: v.reshape(h, w) for k, v in res.items()})
-                bar.update(1)
-                if interrupt_requested():  # a Ctrl-C that something swallowed
-                    raise KeyboardInterrupt
-    finally:
-        bar.close()
-    return {"chunks": len(spec.chunks()), "this_process": len(mine),
-            "computed": len(todo), "resumed": len(mine) - len(todo)}
+    store = grid_store(out, spec)
+
+    def solve(iy, ix):
+        rows, cols = store.rows_and_columns(iy, ix)
+        block = values[rows, cols]
+        h, w = block.shape[:2]
+        res = solve_points(spec.point, block.reshape(h * w, -1), spec.n, devices)
+        return {k: v.reshape(h, w) for k, v in res.items()}
+
+    return store.fill(solve, progress, "map")
 
 
 def fold_crossings(spec, data, rows: int = 12) -> list[dict]:

@@ -3,18 +3,25 @@
 At every point (x, y) of a grid the branch in ``vary`` is traced from the ramped equilibrium
 at the range's start (``jaxrod.equilibria``), its folds are counted (sign changes of dv/ds)
 and the first two refined by Moore-Spence: two folds in the range mean a hysteresis loop
-(bistability between them). One compiled program runs a chunk of points (vmapped); chunks
-run one after another with a progress bar, and Ctrl-C keeps the finished ones.
+(bistability between them). One compiled program runs a square chunk of grid points
+(vmapped, and laid out over the local devices with ``jax.shard_map``, each device running its
+share independently); chunks run one after another with a progress bar, and Ctrl-C keeps the
+finished ones. Given a folder, the map is written chunk by chunk into a resumable store
+(``jaxrod.bistability.grid_store``), which the processes of a ``jax.distributed`` run share.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
+import json
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxrod.bistability.grid_store import GridAxis, GridStore, Variable, read
 from jaxrod.derivatives import Structured
 from jaxrod.equilibria.branch import check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, ramp
@@ -26,7 +33,6 @@ from jaxrod.solvers.continuation import REACHED_BOUND, ContinuationOptions, cont
 from jaxrod.solvers.folds import moore_spence_solve
 from jaxrod.status import Status
 
-CHUNK = 64
 CAPACITY = 160
 MAX_POINTS = 1_000_000
 OPTIONS = ContinuationOptions(ds=0.01, ds_min=1e-9, ds_max=0.05, lam_min=0.0, lam_max=1.0,
@@ -109,14 +115,57 @@ def _chunk_program(X, Y, scene, disc, origin, span, vary, x_key, y_key):
                                         y_key))(X, Y)
 
 
-_chunk = jit(_chunk_program, static_argnames=("vary", "x_key", "y_key"))
+@functools.lru_cache(maxsize=16)
+def _per_device(devices: tuple, vary: str, x_key: str, y_key: str):
+    """The chunk's program as one independent program per device (``jax.shard_map`` over a
+    one-axis mesh of the points; the scene and the range replicated): each device runs its
+    own continuations to its own slowest point, with no collective in the loops."""
+    mesh = jax.sharding.Mesh(np.asarray(devices), ("points",))
+    points, same = jax.sharding.PartitionSpec("points"), jax.sharding.PartitionSpec()
+    fn = functools.partial(_chunk_program, vary=vary, x_key=x_key, y_key=y_key)
+    return jit(jax.shard_map(fn, mesh=mesh, in_specs=(points, points, same, same, same, same),
+                             out_specs=points, check_vma=False)), mesh
+
+
+def _solve_chunk(X, Y, scene, disc, start, span, vary, x_key, y_key, devices, chunk):
+    """(count, first, second, status) at the points (X, Y) of one chunk, padded to the
+    chunk's size (one compiled shape for the edge chunks too) rounded up to a multiple of the
+    devices, and laid out over them."""
+    program, mesh = _per_device(tuple(devices), vary, x_key, y_key)
+    k = X.size
+    size = -(-chunk * chunk // mesh.size) * mesh.size
+    pad = np.concatenate([np.arange(k), np.full(size - k, k - 1)])
+    sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("points"))
+    got = jax.device_get(program(jax.device_put(X[pad], sharding),
+                                 jax.device_put(Y[pad], sharding), scene, disc, start, span))
+    return [np.asarray(g)[:k] for g in got]
+
+
+#: The variables of a fold map's store (``status`` last: it marks a chunk complete).
+VARIABLES = {
+    "count": Variable("<i2", "1", "folds met along the range; -1 not computed"),
+    "first": Variable("<f8", "1", "the first fold's value of the varied input"),
+    "second": Variable("<f8", "1", "the second fold's value of the varied input"),
+    "status": Variable("<i2", "1", "jaxrod.Status code: 0 success, 11 not converged; -1 not "
+                       "computed"),
+}
 
 
 def fold_map(scene: Scene, vary: str, vary_range: tuple[float, float],
              x: tuple[str, np.ndarray], y: tuple[str, np.ndarray], n: int = DEFAULT_N,
-             progress: bool = True) -> FoldMap:
+             progress: bool = True, out=None, chunk: int = 8, devices=None,
+             units: dict | None = None) -> FoldMap:
     """Folds of ``vary`` over ``vary_range`` at every point of the grid x = (key, values),
-    y = (key, values). Ctrl-C raises ``Interrupted`` whose ``partial`` is the map so far."""
+    y = (key, values), computed in square chunks of ``chunk`` points a side, each laid out
+    over ``devices`` (default: all local devices).
+
+    With ``out`` (a folder), the chunks are written into a store there
+    (``jaxrod.bistability.grid_store``: Zarr, read back by ``read_fold_map``): a run
+    started again with the same arguments resumes it, and with ``jax.distributed`` each
+    process computes its own share of the chunks (the map returned then holds that share,
+    count -1 elsewhere; ``read_fold_map`` reads the whole). ``units`` (key -> unit) labels the
+    store's axes. Without ``out``, Ctrl-C raises ``Interrupted`` whose ``partial`` is the
+    map so far; with it, the finished chunks are on disk."""
     start, stop = check_range(scene, vary, *vary_range)
     (x_key, xs), (y_key, ys) = x, y
     for key in (x_key, y_key):
@@ -129,28 +178,51 @@ def fold_map(scene: Scene, vary: str, vary_range: tuple[float, float],
                              f"got {xs.size} x {ys.size}")
     if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(ys))):
         raise ParameterError("the map's axis values must be finite")
+    if not 2 <= chunk <= 1000:
+        raise ParameterError(f"chunk must be in [2, 1000], got {chunk}")
     disc = discretise(scene, n)
-    X, Y = (v.ravel() for v in np.meshgrid(xs, ys))
-    total = X.size
-    out = [np.full(total, -1), np.full(total, np.nan), np.full(total, np.nan),
-           np.full(total, int(Status.NOT_CONVERGED))]
-    bar = progress_bar(total, "fold map", unit="point", enabled=progress)
+    devices = list(devices or jax.local_devices())
+    units = units or {}
+    store = GridStore(out, VARIABLES, GridAxis(x_key, tuple(xs), units.get(x_key, "1")),
+                      GridAxis(y_key, tuple(ys), units.get(y_key, "1")), chunk,
+                      json.dumps({"scene": repr(scene), "vary": vary, "range": [start, stop],
+                                  "n": n, "chunk": chunk}),
+                      {"title": f"jaxrod fold map of {vary} over {x_key} and {y_key}"})
+    grid = [np.full(store.shape, v.fill, np.dtype(v.dtype)) for v in VARIABLES.values()]
+    X, Y = np.meshgrid(xs, ys)
 
     def result():
-        shape = (ys.size, xs.size)
-        return FoldMap(vary, (start, stop), x_key, xs, y_key, ys,
-                       *(o.reshape(shape) for o in out))
+        return FoldMap(vary, (start, stop), x_key, xs, y_key, ys, *grid)
 
-    for lo in range(0, total, CHUNK):
-        idx = np.arange(lo, min(lo + CHUNK, total))
-        pad = np.concatenate([idx, np.full(CHUNK - idx.size, idx[-1])])
-        got = jax.device_get(_chunk(jnp.asarray(X[pad]), jnp.asarray(Y[pad]), scene, disc,
-                                    start, stop - start, vary, x_key, y_key))
-        for o, g in zip(out, got):
-            o[idx] = np.asarray(g)[:idx.size]
-        bar.update(idx.size)
+    def solve(iy, ix):
+        rows, cols = store.rows_and_columns(iy, ix)
+        shape = X[rows, cols].shape
+        got = _solve_chunk(X[rows, cols].ravel(), Y[rows, cols].ravel(), scene, disc, start,
+                           stop - start, vary, x_key, y_key, devices, chunk)
+        for g, part in zip(grid, got):
+            g[rows, cols] = part.reshape(shape)
+        return {name: part.reshape(shape) for name, part in zip(VARIABLES, got)}
+
+    if out is not None:
+        store.fill(solve, progress, "fold map")
+        return result()
+    bar = progress_bar(len(store.chunks()), "fold map", unit="chunk", enabled=progress)
+    for k, (iy, ix) in enumerate(store.chunks()):
+        solve(iy, ix)
+        bar.update(1)
         if interrupt_requested():
             bar.close()
-            raise Interrupted(result(), f"after {idx[-1] + 1} of {total} points")
+            raise Interrupted(result(), f"after {k + 1} of {len(store.chunks())} chunks")
     bar.close()
     return result()
+
+
+def read_fold_map(out) -> FoldMap:
+    """The fold map in the store ``out`` written by ``fold_map(..., out=...)`` (numpy only;
+    count and status -1 where a chunk was not written yet)."""
+    data = read(out)
+    made = json.loads(json.loads((Path(out) / ".zattrs").read_text())["jaxrod_map"])
+    dims = json.loads((Path(out) / "status" / ".zattrs").read_text())["_ARRAY_DIMENSIONS"]
+    y_key, x_key = dims
+    return FoldMap(made["vary"], tuple(made["range"]), x_key, data["x"], y_key, data["y"],
+                   *(data[name] for name in VARIABLES))

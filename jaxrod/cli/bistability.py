@@ -85,9 +85,8 @@ def cmd_foldcurve(args) -> int:
     return 0 if curves.converged else 1
 
 
-def cmd_map(args) -> int:
-    if uses_scene_file(args):
-        return map_on_file(args)
+def _start_processes(args) -> None:
+    """``jax.distributed`` for a map over several processes (each writes its own chunks)."""
     if args.num_processes > 1:
         import jax
 
@@ -97,6 +96,14 @@ def cmd_map(args) -> int:
         jax.distributed.initialize(coordinator_address=args.coordinator,
                                    num_processes=args.num_processes,
                                    process_id=args.process_id)
+
+
+def cmd_map(args) -> int:
+    if args.chunk is not None and not 2 <= args.chunk <= 1000:
+        raise ParameterError(f"chunk must be in [2, 1000], got {args.chunk}")
+    _start_processes(args)
+    if uses_scene_file(args):
+        return map_on_file(args)
     import numpy as np
 
     from jaxrod.bistability.design_map import STORE, MapAxis, MapSpec, read_store, run_map
@@ -113,7 +120,7 @@ def cmd_map(args) -> int:
         inputs[name] = _entry(f"{axis.start:g} to {axis.stop:g}", "", "the map's axis")
     point.index(x.name)
     point.index(y.name)
-    spec = MapSpec(point, x, y, chunk=args.chunk, n=args.n)
+    spec = MapSpec(point, x, y, chunk=args.chunk or 50, n=args.n)
     out = _output_dir(args.out)
     try:
         counts = run_map(spec, out / STORE, progress=not args.quiet)
@@ -188,7 +195,8 @@ def add_map(sub) -> None:
     mp.add_argument("--y", required=True, help="name:start:stop:count of the second input")
     mp.add_argument("--out", required=True, help="directory for the Zarr store map.zarr and, "
                     "beside it, map.png and map.json")
-    mp.add_argument("--chunk", type=int, default=50, help="chunk edge in grid points")
+    mp.add_argument("--chunk", type=int, default=None, help="chunk edge in grid points "
+                    "(default 50; 8 with a scene file)")
     mp.add_argument("--quiet", action="store_true", help="no progress bar")
     mp.add_argument("--no-plot", action="store_true", help="skip map.png and the cusp curve")
     mp.add_argument("--coordinator", default=None, help="HOST:PORT of process 0 "

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import sys
 
 import numpy as np
 
@@ -63,28 +64,40 @@ def foldcurve_on_file(args) -> int:
 
 def map_on_file(args) -> int:
     """``jaxrod map RIG --vary KEY --from A --to B --x KEY:A:B:N --y KEY:A:B:N --out DIR``:
-    the folds along KEY at every grid point (map.json, map.png)."""
+    the folds along KEY at every grid point, into the resumable store DIR/map.zarr (each
+    process of a ``jax.distributed`` run its own chunks), with map.json and map.png beside
+    it."""
+    import jax
+
     import jaxrod as jr
+    from jaxrod.bistability.fold_map import read_fold_map
+    from jaxrod.bistability.grid_store import NOT_COMPUTED
     from jaxrod.cli._output import _output_dir
-    from jaxrod.progress import Interrupted
 
     file = _load(args)
     key, start, stop, factor = _range(args, file)
     xk, xs_key, xf, xs = _axis(args.x, "x", file)
     yk, ys_key, yf, ys = _axis(args.y, "y", file)
     out_dir = _output_dir(args.out)
+    store = out_dir / "map.zarr"
     try:
-        m = jr.fold_map(file.scene, key, (start, stop), (xs_key, xf * xs), (ys_key, yf * ys),
-                        n=args.n, progress=not args.quiet)
-        interrupted = False
-    except Interrupted as err:
-        m, interrupted = err.partial, True
+        jr.fold_map(file.scene, key, (start, stop), (xs_key, xf * xs), (ys_key, yf * ys),
+                    n=args.n, progress=not args.quiet, out=store, chunk=args.chunk or 8)
+    except KeyboardInterrupt:
+        print(f"jaxrod map: interrupted; the finished chunks are kept in {store} (run the "
+              "same command again to resume)", file=sys.stderr)
+        return 130
+    if jax.process_index() != 0:
+        return 0
+    m = read_fold_map(store)
+    missing = int(np.sum(m.status == NOT_COMPUTED))
     out = {"vary": args.vary, "x": xk, "x_values": xs.tolist(), "y": yk,
            "y_values": ys.tolist(), "count": m.count.tolist(),
            "first": np.where(np.isnan(m.first), None, m.first / factor).tolist(),
            "second": np.where(np.isnan(m.second), None, m.second / factor).tolist(),
            "status": m.status.tolist(), "bistable_points": int(np.sum(m.bistable)),
-           "failed_points": int(np.sum(m.status != 0)), "interrupted": interrupted}
+           "failed_points": int(np.sum((m.status != 0) & (m.status != NOT_COMPUTED))),
+           "not_computed_points": missing, "store": str(store)}
     (out_dir / "map.json").write_text(json.dumps(out))
     if not args.no_plot:
         import matplotlib
@@ -98,8 +111,10 @@ def map_on_file(args) -> int:
         ax.set_ylabel(yk)
         fig.savefig(out_dir / "map.png", dpi=120)
     summary = {k: out[k] for k in ("vary", "x", "y", "bistable_points", "failed_points",
-                                   "interrupted")}
+                                   "not_computed_points", "store")}
     print(json.dumps(summary) if args.json else
           f"{args.rig}: {m.count.size} points, {summary['bistable_points']} with two folds "
-          f"in {args.vary}, {summary['failed_points']} failed; wrote {out_dir / 'map.json'}")
-    return 130 if interrupted else (0 if out["failed_points"] == 0 else 1)
+          f"in {args.vary}, {summary['failed_points']} failed"
+          + (f", {missing} not computed yet (other processes)" if missing else "")
+          + f"; wrote {out_dir / 'map.json'} and the store {store}")
+    return 0 if out["failed_points"] == 0 else 1
