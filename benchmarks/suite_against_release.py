@@ -6,8 +6,8 @@ The release is taken from git (``--release REV``, default the tree that closed t
 work) into a temporary directory, and this tree likewise (its last commit: edits that are not
 committed are not measured, and the working tree may change while the suites run). Each
 suite runs as the README says (``python -m pytest``, one xdist worker per core), in its own
-tree, with that tree's package first on the path and a
-fresh compilation cache; the release first, then this tree. Per-test times come from
+tree, with that tree's package first on the path and a fresh compilation cache; the release
+first, then this tree. Per-test times come from
 pytest's JUnit XML (call time with its setup and teardown, summed over the workers: work, not
 wall time).
 
@@ -111,7 +111,20 @@ def run(release: str) -> dict:
     res["slowest_common"] = sorted(
         ({"test": k, "release_s": a[k]["s"], "this_s": b[k]["s"]} for k in common),
         key=lambda r: -max(r["release_s"], r["this_s"]))[:15]
+    res["slowest_this"] = sorted(({"test": k, "s": v["s"]} for k, v in b.items()),
+                                 key=lambda r: -r["s"])[:25]
+    res["by_module_this"] = _by_module(b)
+    res["by_module_release"] = _by_module(a)
     return res
+
+
+def _by_module(times: dict) -> dict[str, float]:
+    """Summed test time per test module, largest first."""
+    out: dict[str, float] = {}
+    for k, v in times.items():
+        module = k.split("::")[0]
+        out[module] = out.get(module, 0.0) + v["s"]
+    return dict(sorted(out.items(), key=lambda kv: -kv[1]))
 
 
 def markdown(res: dict, machine: str) -> str:
@@ -138,6 +151,14 @@ def markdown(res: dict, machine: str) -> str:
              f"| test | this tree, s | release {rel}, s |", "|---|---|---|"]
     for r in res["slowest_common"]:
         lines.append(f"| `{r['test']}` | {r['this_s']:.1f} | {r['release_s']:.1f} |")
+    lines += ["", "Summed time per test module:", "",
+              f"| module | this tree, s | release {rel}, s |", "|---|---|---|"]
+    for module, t in res["by_module_this"].items():
+        t_old = res["by_module_release"].get(module)
+        lines.append(f"| `{module}` | {t:.0f} | {'-' if t_old is None else f'{t_old:.0f}'} |")
+    lines += ["", "The slowest tests of this tree:", "", "| test | s |", "|---|---|"]
+    for r in res["slowest_this"]:
+        lines.append(f"| `{r['test']}` | {r['s']:.1f} |")
     return "\n".join(lines) + "\n"
 
 
