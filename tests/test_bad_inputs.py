@@ -178,6 +178,29 @@ def _outside(valid):
     return bad_text | (low | high).map(repr)
 
 
+def _options(parser, command):
+    sub = next(a for a in parser._actions if a.choices and isinstance(a.choices, dict))
+    return sorted((a.dest, tuple(a.option_strings), str(a.default), a.required)
+                  for a in sub.choices[command]._actions)
+
+
+def test_one_command_parses_as_in_the_full_parser():
+    """A command line builds its command's parser alone (and imports its module alone): the
+    same options, defaults and requirements as in the parser of every command."""
+    from jaxrod.cli import COMMANDS
+
+    full = build_parser()
+    for command in COMMANDS:
+        alone = build_parser(command)
+        assert _options(alone, command) == _options(full, command), command
+    code = ("import sys; from jaxrod.cli import build_parser; build_parser('folds'); "
+            "print(' '.join(m for m in sys.modules if m.startswith('jaxrod.cli.')))")
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=True).stdout.split()
+    assert "jaxrod.cli.magnet" in loaded
+    assert not {"jaxrod.cli.snap", "jaxrod.cli.inverse", "jaxrod.cli.bistability"} & set(loaded)
+
+
 def test_every_numeric_option_is_listed():
     commands = {c for c, _, _ in OPTIONS}
     assert {"greenhill", "folds", "sweep", "track", "fit", "cusp", "map"} <= commands

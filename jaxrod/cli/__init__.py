@@ -9,8 +9,9 @@ question (``uniform``, ``magnet``, ``three_d``, ``bistability``, ``inverse``, ``
 ``scene_file``),
 each with its commands and their options; ``_inputs`` validates the options once and builds
 the rod, magnet or design point from them; ``_output`` writes what the commands share. The
-commands call only public functions of jaxrod (imported inside each command, so that the
-command line's start-up imports only what the command runs).
+commands call only public functions of jaxrod (imported inside each command), and the
+command line imports only the module of the command it runs (``COMMANDS``), so that its
+start-up stays that of ``import jax``.
 """
 
 from __future__ import annotations
@@ -22,19 +23,31 @@ import sys
 
 from jaxrod.cli._inputs import BATCH_N
 from jaxrod.cli._output import _enable_compilation_cache
-from jaxrod.cli.bistability import add_cusp, add_foldcurve, add_map
-from jaxrod.cli.dynamics import add_modes
-from jaxrod.cli.inverse import add_design, add_fit
-from jaxrod.cli.magnet import add_branch, add_certify, add_folds, add_sweep
-from jaxrod.cli.reproduce import add_reproduce
-from jaxrod.cli.scene_file import add_equilibrium
-from jaxrod.cli.snap import add_snap
-from jaxrod.cli.three_d import add_outofplane, add_track
-from jaxrod.cli.uniform import add_greenhill
 from jaxrod.params import ParameterError
 from jaxrod.progress import ctrl_c_guard
 
-__all__ = ["BATCH_N", "build_parser", "main", "run"]
+#: Every command, in the order ``jaxrod -h`` lists them: name -> (module, the function that
+#: adds its parser). A command line names one: only its module is imported.
+COMMANDS = {
+    "greenhill": ("uniform", "add_greenhill"),
+    "equilibrium": ("scene_file", "add_equilibrium"),
+    "folds": ("magnet", "add_folds"),
+    "outofplane": ("three_d", "add_outofplane"),
+    "track": ("three_d", "add_track"),
+    "certify": ("magnet", "add_certify"),
+    "branch": ("magnet", "add_branch"),
+    "sweep": ("magnet", "add_sweep"),
+    "fit": ("inverse", "add_fit"),
+    "design": ("inverse", "add_design"),
+    "cusp": ("bistability", "add_cusp"),
+    "foldcurve": ("bistability", "add_foldcurve"),
+    "map": ("bistability", "add_map"),
+    "modes": ("dynamics", "add_modes"),
+    "snap": ("snap", "add_snap"),
+    "reproduce": ("reproduce", "add_reproduce"),
+}
+
+__all__ = ["BATCH_N", "COMMANDS", "build_parser", "main", "run"]
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):
@@ -50,21 +63,26 @@ class _OneLineErrorParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every command, or of ``command`` alone (the start-up of one command
+    then imports its own module only)."""
+    import importlib
+
     parser = _OneLineErrorParser(
         prog="jaxrod", description="Stability, folds and hysteresis of slender ferromagnetic "
         "rods under gravity and magnetic fields. Each command prints a report, or one JSON "
         "object with --json; bad input exits with status 2, a failed solve with status 1.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_OneLineErrorParser)
-    for add in (add_greenhill, add_equilibrium, add_folds, add_outofplane, add_track,
-                add_certify, add_branch, add_sweep, add_fit, add_design, add_cusp,
-                add_foldcurve, add_map, add_modes, add_snap, add_reproduce):
-        add(sub)
+    for name, (module, add) in COMMANDS.items():
+        if command is None or name == command:
+            getattr(importlib.import_module(f"jaxrod.cli.{module}"), add)(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    # a known command first: its parser alone; anything else (-h, a typo) sees them all
+    parser = build_parser(argv[0] if argv and argv[0] in COMMANDS else None)
     args = parser.parse_args(argv)
     if getattr(args, "n_fallback", None) is not None:
         args.n_default = args.n is None

@@ -12,6 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
+from jaxrod.equilibria.folds import Fold as SceneFold
 from jaxrod.equilibria.record import Branch
 from jaxrod.magnet.diagram import DEFAULT_N, default_options, trace_diagram
 from jaxrod.params import RANGES, check, check_degree, check_track_clearance
@@ -29,29 +30,39 @@ from jaxrod.stored import StoredProgram
 
 
 @dataclasses.dataclass(frozen=True)
-class Fold:
-    """A saddle-node of the planar branch, refined by Moore-Spence.
+class Fold(SceneFold):
+    """A saddle-node of the paper's planar branch in the magnet angle, refined by
+    Moore-Spence: the fold record of every scene (``jaxrod.equilibria.folds.Fold``, with
+    ``vary`` = "magnet.alpha" and ``value`` in radians) and the paper's extras.
 
     ``normal_form_c``: alpha - alpha* ~ c (q - q*)^2 (radians); ``tip_parabola_c``:
     alpha - alpha* ~ c_tip (tip - tip*)^2 (radians; the paper's Corollary "Fold in the
-    experimental tip displacement angle", c_tip = -F_qq / (2 F_alpha T*^2)).
+    experimental tip displacement angle", c_tip = -F_qq / (2 F_alpha T*^2)); ``kind``
+    "lower" or "upper" (or "fold" beyond a pair); ``opens`` the side of the fold where the
+    branch lies; ``hessian_smallest`` its two smallest Hessian eigenvalues. The paper's
+    names read the common fields: ``alpha_deg``, ``tip_deg``, ``dF_dalpha``, ``theta``.
     """
 
     kind: str
-    alpha_deg: float
-    q: float
-    tip_deg: float
-    dF_dalpha: float
-    d2F_dq2: float
-    normal_form_c: float
     tip_parabola_c: float
     opens: str
     hessian_smallest: tuple[float, float]
-    null_vector: np.ndarray
-    theta: np.ndarray
-    converged: bool
-    residual_norm: float
-    iterations: int
+
+    @property
+    def alpha_deg(self) -> float:
+        return math.degrees(self.value)
+
+    @property
+    def tip_deg(self) -> float:
+        return self.tip_angle_deg
+
+    @property
+    def dF_dalpha(self) -> float:
+        return self.dF_dvalue
+
+    @property
+    def theta(self) -> np.ndarray:
+        return self.state
 
     def as_dict(self) -> dict:
         return {
@@ -78,7 +89,7 @@ def _fold_report(fp: FoldPoint, disc: PlanarDiscretisation):
     T = (X[1] * V[0] - X[0] * V[1]) / jnp.dot(X, X)
     m = x.shape[0]
     eigs = jnp.linalg.eigvalsh(J[:m, :m])
-    return (d_alpha, d_qq, c, c / T**2, disc.mean(x), tip_angle(x, disc), eigs[:2], phi_q)
+    return (d_alpha, d_qq, c, c / T**2, disc.mean(x), tip_angle(x, disc), eigs[:2], phi_q, X)
 
 
 def _refine_one(theta0, alpha0, scene, disc, tol):
@@ -200,16 +211,18 @@ def refine_folds(scene: DipoleMagnet, disc: PlanarDiscretisation, theta0, alpha0
     fp, rep = jax.device_get(_refine_batch(theta0, alpha0, scene, disc, tol))
     folds = []
     for i in range(alpha0.shape[0]):
-        d_alpha, d_qq, c, c_tip, q, tip, eigs, phi_q = (np.asarray(v[i]) for v in rep)
+        d_alpha, d_qq, c, c_tip, q, tip, eigs, phi_q, X = (np.asarray(v[i]) for v in rep)
+        conv = bool(fp.newton.converged[i])
         folds.append(Fold(
-            kind="", alpha_deg=math.degrees(float(fp.lam[i])), q=float(q),
-            tip_deg=math.degrees(float(tip)), dF_dalpha=float(d_alpha), d2F_dq2=float(d_qq),
-            normal_form_c=float(c), tip_parabola_c=float(c_tip),
+            vary="magnet.alpha", value=float(fp.lam[i]), tip_angle_deg=math.degrees(float(tip)),
+            tip_position=np.array([X[0], 0.0, X[1]]), state=np.asarray(fp.x[i]),
+            null_vector=phi_q, converged=conv, residual_norm=float(fp.newton.residual_norm[i]),
+            iterations=int(fp.newton.iterations[i]),
+            status=Status.SUCCESS if conv else Status.NOT_CONVERGED, q=float(q),
+            dF_dvalue=float(d_alpha), d2F_dq2=float(d_qq), normal_form_c=float(c), kind="",
+            tip_parabola_c=float(c_tip),
             opens="increasing alpha" if float(c) > 0 else "decreasing alpha",
-            hessian_smallest=(float(eigs[0]), float(eigs[1])), null_vector=phi_q,
-            theta=np.asarray(fp.x[i]), converged=bool(fp.newton.converged[i]),
-            residual_norm=float(fp.newton.residual_norm[i]),
-            iterations=int(fp.newton.iterations[i])))
+            hessian_smallest=(float(eigs[0]), float(eigs[1]))))
     return folds
 
 

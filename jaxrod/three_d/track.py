@@ -32,6 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.director import DirectorDiscretisation, director_discretisation
+from jaxrod.equilibria.record import SpecialPoint
 from jaxrod.params import check, check_degree
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet
@@ -108,17 +109,20 @@ def _refine(x0, t0, scene: DipoleMagnet, track: GreatCircleTrack, disc: Director
 
 
 @dataclasses.dataclass(frozen=True)
-class TrackFold:
-    """A fold of the 3D branch along the track (refined by Moore-Spence)."""
+class TrackFold(SpecialPoint):
+    """A fold of the 3D branch along the track, refined by Moore-Spence: a special point
+    (``jaxrod.equilibria.record.SpecialPoint``, ``vary`` = "t", the track's parameter, and
+    ``value`` in radians; ``tip_angle_deg`` the tip's polar angle from +z) with the magnet's
+    direction there, the rod's azimuth and the Hessian's two smallest eigenvalues."""
 
-    t_deg: float
     magnet_polar_deg: float
     magnet_azimuth_deg: float
     rod_azimuth_deg: float
-    state: np.ndarray
     hessian_smallest: tuple[float, float]
-    converged: bool
-    residual_norm: float
+
+    @property
+    def t_deg(self) -> float:
+        return math.degrees(self.value)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -194,13 +198,18 @@ def trace_track(scene: DipoleMagnet, alpha0_deg: float = 20.0, tilt_deg: float =
         fold, tip, eigs = _refine(jnp.asarray(x[j]), t[j], scene, track, disc)
         p = track.position(fold.lam)
         a, b = _polar_azimuth(p)
+        tip_polar, tip_azimuth = _polar_azimuth(tip)
+        conv = bool(fold.newton.converged)
         folds.append(TrackFold(
-            t_deg=math.degrees(float(fold.lam)), magnet_polar_deg=math.degrees(float(a)),
-            magnet_azimuth_deg=math.degrees(float(b)),
-            rod_azimuth_deg=math.degrees(float(_polar_azimuth(tip)[1])),
-            state=np.asarray(fold.x), hessian_smallest=tuple(float(e) for e in eigs),
-            converged=bool(fold.newton.converged),
-            residual_norm=float(fold.newton.residual_norm)))
+            vary="t", value=float(fold.lam), tip_angle_deg=math.degrees(float(tip_polar)),
+            tip_position=np.asarray(tip), state=np.asarray(fold.x),
+            null_vector=np.asarray(fold.null_vector), converged=conv,
+            residual_norm=float(fold.newton.residual_norm),
+            iterations=int(fold.newton.iterations),
+            status=Status.SUCCESS if conv else Status.NOT_CONVERGED,
+            magnet_polar_deg=math.degrees(float(a)), magnet_azimuth_deg=math.degrees(float(b)),
+            rod_azimuth_deg=math.degrees(float(tip_azimuth)),
+            hessian_smallest=tuple(float(e) for e in eigs)))
     return TrackBranch(
         t_deg=np.degrees(t), magnet=np.asarray(jax.vmap(track.position)(jnp.asarray(t))),
         tip=np.asarray(tips)[:k], states=x, min_eig=np.asarray(raw.min_eig)[:k],

@@ -32,7 +32,8 @@ import dataclasses
 
 import jax
 
-#: Every registered term by its name.
+#: Every registered term by its name: those imported so far (a shipped term is imported on
+#: first use; ``jaxrod.scenes.files``, which reads scene files, imports them all).
 TERMS: dict[str, type] = {}
 
 
@@ -56,15 +57,21 @@ def term(name: str):
     return register
 
 
-from jaxrod.scenes.terms.anisotropy import Anisotropy  # noqa: E402
-from jaxrod.scenes.terms.bending import Bending  # noqa: E402
-from jaxrod.scenes.terms.dipole import Dipole  # noqa: E402
-from jaxrod.scenes.terms.gravity import Gravity  # noqa: E402
-from jaxrod.scenes.terms.path_dipole import PathDipole  # noqa: E402
-from jaxrod.scenes.terms.point_dipole import PointDipole  # noqa: E402
-from jaxrod.scenes.terms.programmed import ProgrammedMagnetisation  # noqa: E402
-from jaxrod.scenes.terms.programmed_dipole import ProgrammedDipole  # noqa: E402
-from jaxrod.scenes.terms.zeeman import Zeeman  # noqa: E402
+#: The shipped terms: class name -> its module, imported on first use (a scene of the paper's
+#: terms does not import the others; ``jaxrod.scenes.files`` imports them all).
+SHIPPED = {"Anisotropy": "anisotropy", "Bending": "bending", "Dipole": "dipole",
+           "Gravity": "gravity", "PathDipole": "path_dipole", "PointDipole": "point_dipole",
+           "ProgrammedDipole": "programmed_dipole",
+           "ProgrammedMagnetisation": "programmed", "Zeeman": "zeeman"}
+
+
+def __getattr__(name: str):
+    if name in SHIPPED:
+        import importlib
+
+        return getattr(importlib.import_module(f"jaxrod.scenes.terms.{SHIPPED[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["TERMS", "term", "Anisotropy", "Bending", "Dipole", "Gravity", "PathDipole",
            "PointDipole", "ProgrammedDipole", "ProgrammedMagnetisation", "Zeeman"]
