@@ -73,9 +73,10 @@ print("RESULT " + json.dumps({{"first_call_s": t2 - t1, "warm_s": warm,
 """
 
 
-def export(rev: str, into: Path) -> Path:
-    """The package ``jaxrod`` of git revision ``rev``, unpacked under ``into``."""
-    data = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "jaxrod"], check=True,
+def export(rev: str, into: Path, paths: tuple[str, ...] = ("jaxrod",)) -> Path:
+    """The ``paths`` of git revision ``rev`` (default the package; () the whole tree),
+    unpacked under ``into``."""
+    data = subprocess.run(["git", "-C", str(ROOT), "archive", rev, *paths], check=True,
                           capture_output=True).stdout
     with tarfile.open(fileobj=io.BytesIO(data)) as tar:
         tar.extractall(into, filter="data")

@@ -19,13 +19,11 @@ the suite's time.
 from __future__ import annotations
 
 import argparse
-import io
 import json
 import os
 import platform
 import subprocess
 import sys
-import tarfile
 import tempfile
 import time
 import xml.etree.ElementTree as ET
@@ -33,6 +31,9 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+from against_last_release import export  # noqa: E402
+
 #: The tree that closed the one-engine work.
 ONE_ENGINE = "5a545fa"
 
@@ -40,12 +41,7 @@ ONE_ENGINE = "5a545fa"
 def export_tree(rev: str, into: Path) -> Path:
     """The whole tree of git revision ``rev`` (package, tests, notebooks, benchmarks),
     unpacked under ``into``."""
-    data = subprocess.run(["git", "-C", str(ROOT), "archive", rev], check=True,
-                          capture_output=True).stdout
-    into.mkdir(parents=True)
-    with tarfile.open(fileobj=io.BytesIO(data)) as tar:
-        tar.extractall(into, filter="data")
-    return into
+    return export(rev, into, paths=())
 
 
 def _short(rev: str) -> str:

@@ -239,7 +239,7 @@ class MapSpec:
                 "chunk": self.chunk, "n": self.n}
 
 
-def grid_store(out: Path, spec: MapSpec) -> GridStore:
+def map_store(out: Path, spec: MapSpec) -> GridStore:
     """The map's store at ``out`` (``jaxrod.bistability.grid_store``): its variables, axes,
     chunks, and the description a resumed run must match."""
     import importlib.metadata
@@ -285,7 +285,7 @@ def run_map(spec: MapSpec, out: Path, progress: bool = True, devices=None) -> di
     ``s.discussion``.
     """
     values = _grid_values(spec.point, spec.x, spec.y)
-    store = grid_store(out, spec)
+    store = map_store(out, spec)
 
     def solve(iy, ix):
         rows, cols = store.rows_and_columns(iy, ix)
