@@ -26,7 +26,7 @@ import jax
 import numpy as np
 
 import jaxrod as jr
-from jaxrod.magnet.batch import fold_pairs_program
+from jaxrod.magnet.batch import fold_pairs_program, padded
 from jaxrod.programs import jit  # as jaxrod compiles its own programs
 
 HERE = Path(__file__).resolve().parent
@@ -59,12 +59,14 @@ def timed(fn, repeat):
 
 
 def memory_per_set(K: int, dtype: str) -> float | None:
-    G, M, D = parameter_sets(K)
+    """Bytes per parameter set of the program ``fold_pairs`` ran for K sets (the padded
+    batch, called as ``fold_pairs`` calls it: the same program, already compiled)."""
+    inputs = padded(parameter_sets(K))
     try:
-        compiled = fold_pairs_program.lower(G, M, D, dtype=dtype).compile()
+        compiled = fold_pairs_program.lower(*inputs, n=12, dtype=dtype).compile()
         mem = compiled.memory_analysis()
         total = mem.temp_size_in_bytes + mem.argument_size_in_bytes + mem.output_size_in_bytes
-        return total / K
+        return total / inputs[0].shape[0]
     except Exception:  # memory analysis is not available on every backend
         return None
 
