@@ -37,6 +37,11 @@ class Status(enum.IntEnum):
     def ok(self) -> bool:
         return self in _OK
 
+    @classmethod
+    def of(cls, converged: bool) -> Status:
+        """A refinement's status from its converged flag: SUCCESS or NOT_CONVERGED."""
+        return cls.SUCCESS if converged else cls.NOT_CONVERGED
+
     @property
     def message(self) -> str:
         return MESSAGES[self]

@@ -45,7 +45,7 @@ def test_magnet_track_leaving_the_plane_snaps_where_the_planar_folds_are():
     scene = magnet.make_scene(2.2, 0.0236, D)
     planar = {f.kind: f.alpha_deg for f in magnet_folds.locate_folds(scene, n=16).folds}
     track = trace_track(scene, alpha0_deg=20.0, tilt_deg=90.0, n=16)
-    assert track.status is jr.Status.REACHED_BOUND
+    assert track.status == (jr.Status.REACHED_BOUND,) and track.complete and track.vary == "t"
     assert track.out_of_plane.max() > 0.5  # genuinely 3D states
     upper, lower = track.folds  # the branch runs round the upper fold, then the lower one
     for fold, kind in ((upper, "upper"), (lower, "lower")):
@@ -60,4 +60,8 @@ def test_magnet_track_leaving_the_plane_snaps_where_the_planar_folds_are():
     np.testing.assert_allclose(track.rod_azimuth_deg[stable][1:],
                                track.magnet_azimuth_deg[stable][1:], atol=1e-8)
     end = track.centreline(len(track.t_deg) - 1)[-1]
-    np.testing.assert_allclose(end, track.tip[-1], atol=1e-12)
+    np.testing.assert_allclose(end, track.tip_position[-1], atol=1e-12)
+    # the Branch record's columns, as for any 3D scene: the tip position's angle, q = int v1
+    np.testing.assert_allclose(track.tip, np.arctan2(track.tip_position[:, 0],
+                                                     track.tip_position[:, 2]), atol=1e-14)
+    assert len(track.fold_indices) == 2 and np.all(np.isfinite(track.energy))

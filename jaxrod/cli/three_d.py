@@ -64,16 +64,16 @@ def cmd_track(args) -> int:
               "hessian_smallest": list(f.hessian_smallest), "converged": f.converged,
               "residual_norm": f.residual_norm} for f in track.folds]
     out = info | {"n": args.n, "alpha0_deg": args.alpha0, "tilt_deg": args.tilt,
-                  "t_max_deg": args.t_max, "status": str(track.status), "points": len(track.t_deg),
+                  "t_max_deg": args.t_max, "status": str(track.status[0]), "points": len(track),
                   "max_out_of_plane": float(track.out_of_plane.max()), "folds": folds,
                   "converged": all(f["converged"] for f in folds)}
     if path is not None:
         with open(path / "track.csv", "w") as fh:
             fh.write("t_deg,magnet_polar_deg,magnet_azimuth_deg,tip_x,tip_y,tip_z,stable\n")
-            for i in range(len(track.t_deg)):
+            for i in range(len(track)):
                 fh.write(f"{track.t_deg[i]:.12g},{track.magnet_polar_deg[i]:.12g},"
                          f"{track.magnet_azimuth_deg[i]:.12g},"
-                         + ",".join(f"{c:.12g}" for c in track.tip[i])
+                         + ",".join(f"{c:.12g}" for c in track.tip_position[i])
                          + f",{int(track.stable[i])}\n")
         (path / "track.json").write_text(json.dumps(out, indent=2) + "\n")
     if args.json:
@@ -81,7 +81,7 @@ def cmd_track(args) -> int:
         return 0 if out["converged"] else 1
     print(_header(info) + f": "
           f"magnet from {args.alpha0} deg in the plane along a great circle tilted "
-          f"{args.tilt} deg; {len(track.t_deg)} points ({track.status}); largest out-of-plane "
+          f"{args.tilt} deg; {len(track)} points ({track.status[0]}); largest out-of-plane "
           f"chart value {out['max_out_of_plane']:.4f} rad")
     for f in folds:
         print(f"fold at t = {f['t_deg']:.10f} deg: magnet polar {f['magnet_polar_deg']:.10f} "

@@ -111,7 +111,7 @@ def refine_branch_points(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Br
             state=np.asarray(x[i]), null_vector=np.asarray(phi[i]), unfolding=float(mu[i]),
             morse_index=(int(b.morse_index[j]), int(b.morse_index[j + 1])), converged=conv,
             residual_norm=float(res.residual_norm[i]), iterations=int(res.iterations[i]),
-            status=Status.SUCCESS if conv else Status.NOT_CONVERGED))
+            status=Status.of(conv)))
     return points
 
 

@@ -84,7 +84,7 @@ def refine(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Fold]:
             state=np.asarray(fp.x[i]), null_vector=phi, converged=conv,
             residual_norm=float(fp.newton.residual_norm[i]),
             iterations=int(fp.newton.iterations[i]),
-            status=Status.SUCCESS if conv else Status.NOT_CONVERGED))
+            status=Status.of(conv)))
     return folds
 
 

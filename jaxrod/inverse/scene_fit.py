@@ -161,7 +161,7 @@ def fit_folds(scene: Scene, vary: str, vary_range: tuple[float, float], measured
                     folds=values, residuals=residuals,
                     chi2=float(np.dot(res.r, res.r)), converged=not reasons,
                     iterations=int(res.iterations),
-                    status=Status.SUCCESS if not reasons else Status.NOT_CONVERGED,
+                    status=Status.of(not reasons),
                     reason="; ".join(reasons) or None)
 
 

@@ -218,7 +218,7 @@ def refine_folds(scene: DipoleMagnet, disc: PlanarDiscretisation, theta0, alpha0
             tip_position=np.array([X[0], 0.0, X[1]]), state=np.asarray(fp.x[i]),
             null_vector=phi_q, converged=conv, residual_norm=float(fp.newton.residual_norm[i]),
             iterations=int(fp.newton.iterations[i]),
-            status=Status.SUCCESS if conv else Status.NOT_CONVERGED, q=float(q),
+            status=Status.of(conv), q=float(q),
             dF_dvalue=float(d_alpha), d2F_dq2=float(d_qq), normal_form_c=float(c), kind="",
             tip_parabola_c=float(c_tip),
             opens="increasing alpha" if float(c) > 0 else "decreasing alpha",
@@ -243,7 +243,7 @@ class FoldReport:
 
     @property
     def status(self) -> Status:
-        return Status.SUCCESS if self.converged else Status.NOT_CONVERGED
+        return Status.of(self.converged)
 
     @property
     def hysteresis_width_deg(self) -> float | None:

@@ -32,7 +32,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.director import DirectorDiscretisation, director_discretisation
-from jaxrod.equilibria.record import SpecialPoint
+from jaxrod.equilibria.equilibrium import mean_functional
+from jaxrod.equilibria.record import Branch, SpecialPoint, branch_from_runs
 from jaxrod.params import check, check_degree
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet
@@ -95,7 +96,13 @@ def _trace(scene: DipoleMagnet, track: GreatCircleTrack, disc: DirectorDiscretis
     # straight rod is far from the engaged state when the magnet pulls hard)
     start = descend(lambda x, a: track_energy(x, 0.0, a), jnp.zeros(disc.size), args)
     raw = continuation_run(track_energy, start.x, 0.0, args, options, capacity, 1.0)
-    return start, raw, jax.vmap(lambda x: _tip(x, disc))(jnp.nan_to_num(raw.x))
+    q = mean_functional(disc)
+
+    def observed(x, t):  # the Branch record's columns, and the tip position
+        X = _tip(x, disc)
+        return q(x), jnp.arctan2(X[0], X[2]), track_energy(x, t, args), X
+
+    return start, raw, jax.vmap(observed)(jnp.nan_to_num(raw.x), raw.lam)
 
 
 @jit
@@ -126,22 +133,25 @@ class TrackFold(SpecialPoint):
 
 
 @dataclasses.dataclass(frozen=True)
-class TrackBranch:
-    """3D equilibria along a magnet track (first axis = branch point; angles in degrees).
+class TrackBranch(Branch):
+    """3D equilibria along a magnet track: the ``Branch`` record (``jaxrod.equilibria.record``)
+    in the track parameter (``vary`` = "t", ``value`` in radians; ``theta`` the chart unknowns
+    [v1; v2]; ``q`` = int v1; ``tip`` the tip position's angle from +z toward +x, as for any
+    3D scene, and ``tip_position`` X = int d3; ``stable``: Morse index 0), with the magnet's
+    direction p(t) per point (``magnet``), the refined ``folds`` and the degree ``n``."""
 
-    ``states``: the chart unknowns [v1; v2]; ``magnet`` the magnet direction p(t);
-    ``tip`` the tip position int d3; ``stable``: Morse index 0.
-    """
+    magnet: np.ndarray | None = None
+    folds: tuple[TrackFold, ...] = ()
+    n: int = 16
 
-    t_deg: np.ndarray
-    magnet: np.ndarray
-    tip: np.ndarray
-    states: np.ndarray
-    min_eig: np.ndarray
-    stable: np.ndarray
-    status: Status
-    folds: tuple[TrackFold, ...]
-    n: int
+    @property
+    def t_deg(self) -> np.ndarray:
+        return np.degrees(self.value)
+
+    @property
+    def states(self) -> np.ndarray:
+        """The chart unknowns [v1; v2] per point (``theta``)."""
+        return self.theta
 
     @property
     def magnet_polar_deg(self) -> np.ndarray:
@@ -153,7 +163,7 @@ class TrackBranch:
 
     @property
     def rod_azimuth_deg(self) -> np.ndarray:
-        return np.degrees(_polar_azimuth(self.tip)[1])
+        return np.degrees(_polar_azimuth(self.tip_position)[1])
 
     @property
     def out_of_plane(self) -> np.ndarray:
@@ -183,17 +193,16 @@ def trace_track(scene: DipoleMagnet, alpha0_deg: float = 20.0, tilt_deg: float =
     disc = director_discretisation(check_degree(n, "N-magnet"))
     options = ContinuationOptions(ds=0.02, ds_min=1e-8, ds_max=0.05, lam_min=-1e-9,
                                   lam_max=math.radians(t_max_deg), tol=1e-12, max_points=0)
-    start, raw, tips = _trace(scene, track, disc, options, max_points)
+    start, raw, (q, tip, energy, X) = _trace(scene, track, disc, options, max_points)
     if not bool(start.converged):
         raise RuntimeError("no equilibrium reached at the track's start (energy descent: "
                            f"|grad| = {float(start.gradient_norm):.3g} after "
                            f"{int(start.iterations)} steps)")
-    k = int(raw.num_points)
-    t = np.asarray(raw.lam)[:k]
-    x = np.asarray(raw.x)[:k]
-    tangent = np.asarray(raw.tangent_lam)[:k]
+    branch = branch_from_runs([(raw, False, (q, tip, energy))])
+    k = len(branch)
+    t, x, tangent = branch.value, branch.theta, branch.tangent_value
     folds = []
-    for i in np.nonzero(np.sign(tangent[:-1]) * np.sign(tangent[1:]) < 0)[0]:
+    for i in branch.fold_indices:
         j = i if abs(tangent[i]) < abs(tangent[i + 1]) else i + 1
         fold, tip, eigs = _refine(jnp.asarray(x[j]), t[j], scene, track, disc)
         p = track.position(fold.lam)
@@ -205,13 +214,11 @@ def trace_track(scene: DipoleMagnet, alpha0_deg: float = 20.0, tilt_deg: float =
             tip_position=np.asarray(tip), state=np.asarray(fold.x),
             null_vector=np.asarray(fold.null_vector), converged=conv,
             residual_norm=float(fold.newton.residual_norm),
-            iterations=int(fold.newton.iterations),
-            status=Status.SUCCESS if conv else Status.NOT_CONVERGED,
+            iterations=int(fold.newton.iterations), status=Status.of(conv),
             magnet_polar_deg=math.degrees(float(a)), magnet_azimuth_deg=math.degrees(float(b)),
             rod_azimuth_deg=math.degrees(float(tip_azimuth)),
             hessian_smallest=tuple(float(e) for e in eigs)))
-    return TrackBranch(
-        t_deg=np.degrees(t), magnet=np.asarray(jax.vmap(track.position)(jnp.asarray(t))),
-        tip=np.asarray(tips)[:k], states=x, min_eig=np.asarray(raw.min_eig)[:k],
-        stable=np.asarray(raw.morse_index)[:k] == 0, status=Status(int(raw.status)),
-        folds=tuple(folds), n=n)
+    fields = {f.name: getattr(branch, f.name) for f in dataclasses.fields(Branch)}
+    return TrackBranch(**fields | {"vary": "t", "tip_position": np.asarray(X)[:k]},
+                       magnet=np.asarray(jax.vmap(track.position)(jnp.asarray(t))),
+                       folds=tuple(folds), n=n)
