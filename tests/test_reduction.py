@@ -11,6 +11,7 @@ from scipy.integrate import solve_bvp
 from scipy.optimize import brentq
 
 from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.equilibria.folds import Fold as SceneFold
 from jaxrod.magnet import diagram as magnet
 from jaxrod.magnet import folds as magnet_folds
 from jaxrod.magnet.contraction import (
@@ -33,6 +34,7 @@ from jaxrod.magnet.reduction import (
     second_variation_checks,
 )
 from jaxrod.params import ParameterError
+from jaxrod.status import Status
 
 D_PAPER = 11.25 / 9.2
 CASES = {"E200": (2.2, 0.0236), "E100": (4.4, 0.0472)}
@@ -96,6 +98,13 @@ def test_reduced_folds_agree_with_moore_spence(folds, case):
         assert r.dF_dalpha > 0 and r.d2F_dq2 * (1 if r.kind == "upper" else -1) > 0
         assert r.dF_dalpha == pytest.approx(f.dF_dalpha, rel=1e-8)
         assert r.d2F_dq2 == pytest.approx(f.d2F_dq2, rel=1e-7)
+        # one fold record: the Hessian's kernel xi = psi + dw/dq (int xi = 1) is Moore-Spence's
+        # null vector, the tip position and normal form the same
+        assert isinstance(r, SceneFold) and r.vary == f.vary == "magnet.alpha"
+        np.testing.assert_allclose(r.null_vector, f.null_vector, atol=1e-8)
+        np.testing.assert_allclose(r.tip_position, f.tip_position, atol=1e-11)
+        assert r.normal_form_c == pytest.approx(f.normal_form_c, rel=1e-7)
+        assert r.opens == f.opens and r.status is Status.SUCCESS
         # printed alpha*, q*: within the paper's discretisation error (README), never above ours
         q_p, a_p = PAPER[case][r.kind][2:]
         assert 0 < r.alpha_deg - a_p < 2.5e-3 and abs(r.q - q_p) < 1e-4

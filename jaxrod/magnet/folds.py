@@ -29,24 +29,9 @@ from jaxrod.status import SolverError, Status
 from jaxrod.stored import StoredProgram
 
 
-@dataclasses.dataclass(frozen=True)
-class Fold(SceneFold):
-    """A saddle-node of the paper's planar branch in the magnet angle, refined by
-    Moore-Spence: the fold record of every scene (``jaxrod.equilibria.folds.Fold``, with
-    ``vary`` = "magnet.alpha" and ``value`` in radians) and the paper's extras.
-
-    ``normal_form_c``: alpha - alpha* ~ c (q - q*)^2 (radians); ``tip_parabola_c``:
-    alpha - alpha* ~ c_tip (tip - tip*)^2 (radians; the paper's Corollary "Fold in the
-    experimental tip displacement angle", c_tip = -F_qq / (2 F_alpha T*^2)); ``kind``
-    "lower" or "upper" (or "fold" beyond a pair); ``opens`` the side of the fold where the
-    branch lies; ``hessian_smallest`` its two smallest Hessian eigenvalues. The paper's
-    names read the common fields: ``alpha_deg``, ``tip_deg``, ``dF_dalpha``, ``theta``.
-    """
-
-    kind: str
-    tip_parabola_c: float
-    opens: str
-    hessian_smallest: tuple[float, float]
+class PaperNames:
+    """The paper's names of a magnet-angle fold's common fields (``SceneFold``):
+    ``alpha_deg`` (value in degrees), ``tip_deg``, ``dF_dalpha``, ``theta`` (the state)."""
 
     @property
     def alpha_deg(self) -> float:
@@ -63,6 +48,26 @@ class Fold(SceneFold):
     @property
     def theta(self) -> np.ndarray:
         return self.state
+
+
+@dataclasses.dataclass(frozen=True)
+class Fold(PaperNames, SceneFold):
+    """A saddle-node of the paper's planar branch in the magnet angle, refined by
+    Moore-Spence: the fold record of every scene (``jaxrod.equilibria.folds.Fold``, with
+    ``vary`` = "magnet.alpha" and ``value`` in radians) and the paper's extras.
+
+    ``normal_form_c``: alpha - alpha* ~ c (q - q*)^2 (radians); ``tip_parabola_c``:
+    alpha - alpha* ~ c_tip (tip - tip*)^2 (radians; the paper's Corollary "Fold in the
+    experimental tip displacement angle", c_tip = -F_qq / (2 F_alpha T*^2)); ``kind``
+    "lower" or "upper" (or "fold" beyond a pair); ``opens`` the side of the fold where the
+    branch lies; ``hessian_smallest`` its two smallest Hessian eigenvalues. The paper's
+    names read the common fields (``PaperNames``).
+    """
+
+    kind: str
+    tip_parabola_c: float
+    opens: str
+    hessian_smallest: tuple[float, float]
 
     def as_dict(self) -> dict:
         return {

@@ -48,14 +48,17 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
+from jaxrod.equilibria.folds import Fold as SceneFold
+from jaxrod.magnet.folds import PaperNames
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
-from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle, tip_position
 from jaxrod.scenes.functionals import bending_energy
 from jaxrod.solvers import dense
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.eigen import smallest_generalised_eigenvalue
 from jaxrod.solvers.newton import implicit_newton, newton
+from jaxrod.status import Status
 from jaxrod.stored import StoredProgram
 
 
@@ -295,50 +298,52 @@ def _reduced_fold_pair(scene: DipoleMagnet, disc: PlanarDiscretisation, tol):
     one = jax.vmap(lambda q, a: one_mode_fold(red, scene, disc, q, a))(q_start, a_start)
     full = jax.vmap(lambda x: reduced_fold(red, scene, disc, x[0], x[1], tol))(one.x)
 
-    def report(x):
-        jet, theta, stats = reduced_jet(x[0], x[1], red, scene, disc)
-        return dict(zip(JET_NAMES, jet)), tip_angle(theta, disc), stats, theta
+    def report(x):  # reduced_jet's parts, with xi (the Hessian's kernel) and the tip
+        theta, stats = reduced_state(x[0], x[1], red, scene, disc)
+        xi, theta_alpha = _state_derivatives(theta, x[1], red, scene, disc)
+        jet = _jet(theta, xi, theta_alpha, x[1], red, scene, disc)
+        return (dict(zip(JET_NAMES, jet)), tip_angle(theta, disc), stats, theta, xi,
+                tip_position(theta, disc))
 
-    derivs, tip, inner, theta = jax.vmap(report)(full.x)
-    return found, one, full, derivs, tip, inner, theta, red
+    derivs, tip, inner, theta, xi, X = jax.vmap(report)(full.x)
+    return found, one, full, derivs, tip, inner, theta, xi, X, red
 
 
 _reduced_fold_pair_jit = StoredProgram("reduced-fold-pair", _reduced_fold_pair)
 
 
 @dataclasses.dataclass(frozen=True)
-class ReducedFold:
-    """A fold from the reduced route: the one-mode start (q0, alpha0) and the fold
-    (q*, alpha*) of F = dF/dq = 0, with the derivatives of F there and solver diagnostics."""
+class ReducedFold(PaperNames, SceneFold):
+    """A fold from the reduced route: the fold record of every scene
+    (``jaxrod.equilibria.folds.Fold``: ``vary`` = "magnet.alpha", ``value`` alpha* in radians,
+    ``state`` theta = q* psi + w, ``null_vector`` xi = psi + dw/dq (int xi = 1), the normal
+    form from F's derivatives) with the paper's names (``PaperNames``), the one-mode start
+    (q0, alpha0), the other derivatives of F there and the inner w-solve's diagnostics."""
 
     kind: str
     q0: float
     alpha0_deg: float
-    q: float
-    alpha_deg: float
-    tip_deg: float
     dF_dq: float
-    dF_dalpha: float
-    d2F_dq2: float
     d2F_dq_dalpha: float
-    theta: np.ndarray
-    converged: bool
-    residual_norm: float
-    iterations: int
     one_mode_converged: bool
     correction_converged: bool
     correction_residual: float
 
     @property
     def opens(self) -> str:
-        c = -self.d2F_dq2 / (2.0 * self.dF_dalpha)
-        return "increasing alpha" if c > 0 else "decreasing alpha"
+        return "increasing alpha" if self.normal_form_c > 0 else "decreasing alpha"
 
     def as_dict(self) -> dict:
-        out = {k: v for k, v in dataclasses.asdict(self).items() if k != "theta"}
-        out |= {"dF_dalpha_sign": int(np.sign(self.dF_dalpha)),
+        return {"kind": self.kind, "q0": self.q0, "alpha0_deg": self.alpha0_deg, "q": self.q,
+                "alpha_deg": self.alpha_deg, "tip_deg": self.tip_deg, "dF_dq": self.dF_dq,
+                "dF_dalpha": self.dF_dalpha, "d2F_dq2": self.d2F_dq2,
+                "d2F_dq_dalpha": self.d2F_dq_dalpha, "converged": self.converged,
+                "residual_norm": self.residual_norm, "iterations": self.iterations,
+                "one_mode_converged": self.one_mode_converged,
+                "correction_converged": self.correction_converged,
+                "correction_residual": self.correction_residual,
+                "dF_dalpha_sign": int(np.sign(self.dF_dalpha)),
                 "d2F_dq2_sign": int(np.sign(self.d2F_dq2)), "opens": self.opens}
-        return out
 
 
 def check_reducible(scene: DipoleMagnet) -> None:
@@ -361,19 +366,24 @@ def reduced_folds(scene: DipoleMagnet, n: int = 16, tol: float = 1e-13) -> list[
     """
     check_reducible(scene)
     disc = planar_discretisation(n, "clamped")
-    found, one, full, derivs, tip, inner, theta, _ = _reduced_fold_pair_jit(scene, disc, tol)
+    found, one, full, derivs, tip, inner, theta, xi, X, _ = _reduced_fold_pair_jit(scene, disc,
+                                                                                   tol)
     if not bool(found):
         return []
     folds = []
     for i in range(2):
         d = {k: float(v[i]) for k, v in derivs.items()}
+        converged = bool(full.converged[i]) and bool(inner[i, 0] == 1.0)
         folds.append(ReducedFold(
-            kind="", q0=float(one.x[i, 0]), alpha0_deg=math.degrees(float(one.x[i, 1])),
-            q=float(full.x[i, 0]), alpha_deg=math.degrees(float(full.x[i, 1])),
-            tip_deg=math.degrees(float(tip[i])), dF_dq=d["dF_dq"], dF_dalpha=d["dF_dalpha"],
-            d2F_dq2=d["d2F_dq2"], d2F_dq_dalpha=d["d2F_dq_dalpha"], theta=np.asarray(theta[i]),
-            converged=bool(full.converged[i]) and bool(inner[i, 0] == 1.0),
+            vary="magnet.alpha", value=float(full.x[i, 1]),
+            tip_angle_deg=math.degrees(float(tip[i])),
+            tip_position=np.array([X[i, 0], 0.0, X[i, 1]]),
+            state=np.asarray(theta[i]), null_vector=np.asarray(xi[i]), converged=converged,
             residual_norm=float(full.residual_norm[i]), iterations=int(full.iterations[i]),
+            status=Status.of(converged), q=float(full.x[i, 0]), dF_dvalue=d["dF_dalpha"],
+            d2F_dq2=d["d2F_dq2"], normal_form_c=-d["d2F_dq2"] / (2.0 * d["dF_dalpha"]),
+            kind="", q0=float(one.x[i, 0]), alpha0_deg=math.degrees(float(one.x[i, 1])),
+            dF_dq=d["dF_dq"], d2F_dq_dalpha=d["d2F_dq_dalpha"],
             one_mode_converged=bool(one.converged[i]),
             correction_converged=bool(inner[i, 0] == 1.0),
             correction_residual=float(inner[i, 1])))
