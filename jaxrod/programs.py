@@ -21,9 +21,11 @@ backend, so ``jax.distributed.initialize`` and device-count settings still work 
 from __future__ import annotations
 
 import functools
+import inspect
 from collections.abc import Callable
 
 import jax
+import numpy as np
 
 #: XLA options for jaxrod's programs (module docstring).
 COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
@@ -52,12 +54,28 @@ def _inside_a_trace() -> bool:
         return True
 
 
+def _strong(leaf):
+    """A Python float or int as a float64 or int64 numpy scalar (a strongly typed input);
+    other leaves unchanged."""
+    if type(leaf) is float:
+        return np.float64(leaf)
+    if type(leaf) is int:
+        return np.int64(leaf)
+    return leaf
+
+
 class Program:
     """``jax.jit(fn, **kwargs)`` compiled with ``compiler_options()``, built on first use.
 
     Called at the top level it compiles with the options; inside another trace (jit, grad,
     vmap) it is a plain nested ``jax.jit``. ``lower`` and every other attribute go to the
     top-level function.
+
+    At the top level, Python floats and ints among the dynamic inputs (a scene's inputs, say)
+    are passed as float64 and int64 scalars: JAX gives Python numbers a weak type and compiles
+    a program for them apart from the one for numpy numbers of the same shape, so that a
+    scene made of Python floats and one made of numpy floats compiled twice (jaxrod's programs
+    compute in float64; the float32 path casts its inputs itself).
     """
 
     def __init__(self, fn: Callable, **kwargs):
@@ -67,6 +85,27 @@ class Program:
         self._kwargs = kwargs
         self._jitted = None
         self.nested = jax.jit(fn, **kwargs)
+        names = set(kwargs.get("static_argnames", ()) if not isinstance(
+            kwargs.get("static_argnames"), str) else (kwargs["static_argnames"],))
+        numbers = kwargs.get("static_argnums", ())
+        numbers = {numbers} if isinstance(numbers, int) else set(numbers)
+        try:
+            params = list(inspect.signature(fn).parameters)
+        except (TypeError, ValueError):  # no signature: leave the inputs as they are
+            params = None
+        self._static_names = names | {params[i] for i in numbers if params and i < len(params)}
+        self._static_positions = numbers | {i for i, p in enumerate(params or ()) if p in names}
+        self._canonical = params is not None
+
+    def _strong_inputs(self, args, kwargs):
+        """The call's dynamic inputs with Python numbers made strongly typed (class docstring)."""
+        if not self._canonical:
+            return args, kwargs
+        args = tuple(a if i in self._static_positions else jax.tree_util.tree_map(_strong, a)
+                     for i, a in enumerate(args))
+        kwargs = {k: v if k in self._static_names else jax.tree_util.tree_map(_strong, v)
+                  for k, v in kwargs.items()}
+        return args, kwargs
 
     @property
     def jitted(self):
@@ -79,6 +118,7 @@ class Program:
     def __call__(self, *args, **kwargs):
         if _inside_a_trace():
             return self.nested(*args, **kwargs)
+        args, kwargs = self._strong_inputs(args, kwargs)
         return self.jitted(*args, **kwargs)
 
     def __getattr__(self, name):

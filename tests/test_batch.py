@@ -102,10 +102,11 @@ def test_a_set_without_folds_is_nan_and_certified_not_bistable():
 
 
 def test_batch_sizes_are_bucketed():
-    """Batches are padded to sizes m 2^j (m = 8..15): at most 1/8 of padding, and the batch
-    sizes of one doubling (e.g. 1025 to 2048) share 8 programs."""
+    """Batches are padded to sizes m 2^j (m = 8..15), at least 8: batches of 1 to 8 share one
+    program, above 8 at most 1/8 of padding, and the batch sizes of one doubling (e.g. 1025
+    to 2048) share 8 programs."""
     assert [bucket(k) for k in (1, 2, 3, 5, 8, 9, 17, 1000, 10_000)] == \
-        [1, 2, 4, 8, 8, 9, 18, 1024, 10240]
+        [8, 8, 8, 8, 8, 9, 18, 1024, 10240]
     assert len({bucket(k) for k in range(1025, 2049)}) == 8
     assert all(bucket(k) >= k for k in range(1, 5000))
     assert all(bucket(k) <= 1.125 * k + 1 for k in range(9, 5000))

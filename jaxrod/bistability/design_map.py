@@ -59,6 +59,7 @@ from jaxrod.magnet.batch import (  # noqa: F401 (the reason codes, re-exported)
     NOT_CONVERGED,
     STATUS,
     batch_fold_angles,
+    bucket,
     resolve_failures,
 )
 from jaxrod.params import UNITS, ParameterError
@@ -152,11 +153,12 @@ def _per_device(devices: tuple, n: int):
                              out_specs=(spec, spec), check_vma=False)), mesh
 
 
-def _sharded(arrays, mesh):
-    """Pad the 1-D arrays to a multiple of the mesh's device count and lay them out over it
-    (the points split between devices)."""
+def _sharded(arrays, mesh, size: int | None = None):
+    """Pad the 1-D arrays to ``size`` points (at least their own) rounded up to a multiple of
+    the mesh's device count and lay them out over it (the points split between devices)."""
     k = arrays[0].shape[0]
-    pad = (-k) % mesh.size
+    size = max(k, size or k)
+    pad = size - k + (-size) % mesh.size
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("points"))
     # padding repeats the first point (a valid parameter set), dropped afterwards
     return [jax.device_put(np.concatenate([a, np.repeat(a[:1], pad)]), sharding)
@@ -164,8 +166,10 @@ def _sharded(arrays, mesh):
 
 
 def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
-                 devices=None) -> dict[str, np.ndarray]:
-    """Capture/release angles (deg), width and reason for rows of input ``values`` (K, P)."""
+                 devices=None, size: int | None = None) -> dict[str, np.ndarray]:
+    """Capture/release angles (deg), width and reason for rows of input ``values`` (K, P);
+    ``size``: the batch the first tier runs (the rows padded to it; a map's chunk size, so
+    that its edge chunks run the same compiled program; default ``batch.bucket``)."""
     devices = list(devices or jax.local_devices())
     k = values.shape[0]
     valid = _validity(point, values)
@@ -178,7 +182,7 @@ def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
     reason = np.where(valid, NOT_CONVERGED, INVALID_INPUT).astype(np.int8)
     if valid.any():
         program, mesh = _per_device(tuple(devices), n)
-        inputs, _ = _sharded([G, M, D], mesh)
+        inputs, _ = _sharded([G, M, D], mesh, size or bucket(k))
         a1, ok = jax.device_get(program(*inputs))
         a1, ok = np.asarray(a1)[:k], np.asarray(ok)[:k] & valid
         alphas[ok] = a1[ok]
@@ -291,7 +295,8 @@ def run_map(spec: MapSpec, out: Path, progress: bool = True, devices=None) -> di
         rows, cols = store.rows_and_columns(iy, ix)
         block = values[rows, cols]
         h, w = block.shape[:2]
-        res = solve_points(spec.point, block.reshape(h * w, -1), spec.n, devices)
+        res = solve_points(spec.point, block.reshape(h * w, -1), spec.n, devices,
+                           spec.chunk * spec.chunk)
         return {k: v.reshape(h, w) for k, v in res.items()}
 
     return store.fill(solve, progress, "map")
