@@ -90,7 +90,7 @@ def run(quick: bool, auto: bool) -> dict:
     ns_reduced = [12] if quick else [6, 8, 12, 16]
     ns_cont = [12] if quick else [8, 16]
     repeat = 3 if quick else 20
-    bvp_settings = [(1e-4, 1e-3)] if quick else [(1e-3, 1e-2), (1e-4, 1e-3), (1e-6, 1e-5),
+    bvp_settings = [(1e-3, 1e-2)] if quick else [(1e-3, 1e-2), (1e-4, 1e-3), (1e-6, 1e-5),
                                                  (1e-8, 1e-7)]
     sine_modes = [8] if quick else [4, 8, 16, 32, 64]
     rows = []
