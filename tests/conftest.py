@@ -7,17 +7,20 @@ import tempfile
 import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
-# The CLI's persistent compilation cache stays off in the test process (and the processes it
-# starts): tests must not depend on, or write into, a user's cache.
-os.environ.setdefault("JAXROD_NO_CACHE", "1")
-# One fresh compilation cache for this test session, shared by the test workers and every
-# process they start (benchmark scripts, notebooks, the CLI): a program that several of them
-# compile is compiled once. Created by the first process (the xdist controller), removed when
-# it exits; the benchmark that measures compile times gives its children no cache of ours.
-if "JAX_COMPILATION_CACHE_DIR" not in os.environ:
-    _cache = tempfile.mkdtemp(prefix="jaxrod-test-xla-")
+# One fresh cache folder for this test session, shared by the test workers and every process
+# they start (benchmark scripts, notebooks, the CLI): JAX's compilation cache, so that a
+# program that several of them compile is compiled once, and the command line's store of
+# traced programs (``jaxrod.stored``; the CLI keeps its caches on, as it does for users), so
+# that a command run in several processes (a map interrupted and resumed, say) is traced once.
+# Tests never read or write a user's cache. Created by the first process (the xdist
+# controller), removed when it exits; the benchmark that measures compile times gives its
+# children no cache of ours.
+if "JAXROD_TEST_CACHE" not in os.environ:
+    _cache = tempfile.mkdtemp(prefix="jaxrod-test-cache-")
     atexit.register(shutil.rmtree, _cache, ignore_errors=True)
-    os.environ["JAX_COMPILATION_CACHE_DIR"] = _cache
+    os.environ["JAXROD_TEST_CACHE"] = _cache
+    os.environ["JAXROD_CACHE_DIR"] = _cache
+    os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", _cache)
     os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.2")
 
 import jaxrod  # noqa: E402,F401  (sets float64)

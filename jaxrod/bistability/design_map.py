@@ -59,6 +59,7 @@ from jaxrod.magnet.batch import (  # noqa: F401 (the reason codes, re-exported)
     NOT_CONVERGED,
     STATUS,
     batch_fold_angles,
+    batch_fold_angles_program,
     bucket,
     resolve_failures,
 )
@@ -145,8 +146,11 @@ def _validity(point: DesignPoint, values: np.ndarray) -> np.ndarray:
 def _per_device(devices: tuple, n: int):
     """The batched fold-pair program as one independent program per device
     (``jax.shard_map`` over a one-axis mesh of the points): each device runs its own Newton
-    loops to its own slowest point, with no collective in the loop conditions."""
+    loops to its own slowest point, with no collective in the loop conditions. On one device
+    it is ``batch_fold_angles_program`` itself (kept in the command line's store)."""
     mesh = jax.sharding.Mesh(np.asarray(devices), ("points",))
+    if len(devices) == 1:
+        return functools.partial(batch_fold_angles_program, n=n, cells=1), mesh
     spec = jax.sharding.PartitionSpec("points")
     fn = functools.partial(batch_fold_angles, n=n)
     return jit(jax.shard_map(fn, mesh=mesh, in_specs=(spec, spec, spec),

@@ -47,6 +47,7 @@ from jaxrod.solvers.folds import (
     moore_spence_step,
 )
 from jaxrod.solvers.newton import newton
+from jaxrod.stored import StoredProgram
 
 #: The (q, alpha) grid that brackets the one-mode folds: q in [0, Q_MAX], alpha in [0, 90] deg.
 GRID_Q, GRID_ALPHA, Q_MAX = 32, 32, 1.6
@@ -399,13 +400,19 @@ def batch_fold_angles(G, M, D, n: int, cells: int = 1):
     return z[:, :, -1], converged
 
 
-_wider_program = jit(batch_fold_angles, static_argnames=("n", "cells"))
+#: ``batch_fold_angles`` compiled (tiers 1 and 2 of a map's chunk on one device); kept in the
+#: command line's store, so that a later process does not trace it again.
+batch_fold_angles_program = StoredProgram("batch-fold-angles", batch_fold_angles,
+                                          static_argnames=("n", "cells"))
 
 
-@jit(static_argnames=("n",))
-def _continuation_program(G, M, D, n: int):
+def _continuation_batch(G, M, D, n: int):
     disc = planar_discretisation(n, "clamped")
     return jax.vmap(lambda g, m, d: continuation_pair(g, m, d, disc))(G, M, D)
+
+
+_continuation_program = StoredProgram("batch-continuation", _continuation_batch,
+                                      static_argnames=("n",))
 
 
 def resolve_failures(G, M, D, alphas, status, tier, n: int = 12):
@@ -416,7 +423,7 @@ def resolve_failures(G, M, D, alphas, status, tier, n: int = 12):
     batched tiers run in float64 on padded batches (``bucket``)."""
     retry = np.nonzero(status == NOT_CONVERGED)[0]
     if retry.size:  # tier 2
-        a2, ok2 = jax.device_get(_wider_program(*padded([G[retry], M[retry], D[retry]]),
+        a2, ok2 = jax.device_get(batch_fold_angles_program(*padded([G[retry], M[retry], D[retry]]),
                                                 n=n, cells=RETRY_CELLS))
         a2, ok2 = np.asarray(a2)[:retry.size], np.asarray(ok2)[:retry.size]
         alphas[retry[ok2]], status[retry[ok2]], tier[retry] = a2[ok2], BISTABLE, 2
