@@ -13,6 +13,7 @@ from jaxrod.magnet.batch import (
     NOT_CONVERGED,
     bucket,
     fold_pairs,
+    retry_size,
 )
 from jaxrod.programs import jit
 
@@ -102,11 +103,12 @@ def test_a_set_without_folds_is_nan_and_certified_not_bistable():
 
 
 def test_batch_sizes_are_bucketed():
-    """Batches are padded to sizes m 2^j (m = 8..15), at least 8: batches of 1 to 8 share one
-    program, above 8 at most 1/8 of padding, and the batch sizes of one doubling (e.g. 1025
-    to 2048) share 8 programs."""
+    """Batches are padded to sizes m 2^j (m = 8..15): one set alone, batches of 2 to 8 share
+    one program (the retry tiers' batches of 1 too), above 8 at most 1/8 of padding, and the
+    batch sizes of one doubling (e.g. 1025 to 2048) share 8 programs."""
     assert [bucket(k) for k in (1, 2, 3, 5, 8, 9, 17, 1000, 10_000)] == \
-        [8, 8, 8, 8, 8, 9, 18, 1024, 10240]
+        [1, 8, 8, 8, 8, 9, 18, 1024, 10240]
+    assert [retry_size(k) for k in (1, 2, 8, 9, 17)] == [8, 8, 8, 9, 18]
     assert len({bucket(k) for k in range(1025, 2049)}) == 8
     assert all(bucket(k) >= k for k in range(1, 5000))
     assert all(bucket(k) <= 1.125 * k + 1 for k in range(9, 5000))

@@ -332,19 +332,29 @@ class FoldPairs(NamedTuple):
         return [STATUS[int(c)] for c in self.status]
 
 
-#: The smallest padded batch: on a CPU a batch of 8 runs in 2-4x the time of a batch of 1
-#: (tier 1: 2.9 ms against 1.4 ms; the batched continuation 42 ms against 11 ms), while each
-#: distinct batch size compiles its own program (10-15 s): batches of 1 to 8 share one.
+#: The smallest padded batch of several sets: on a CPU a batch of 8 runs in 2-4x the time of
+#: a batch of 1 (tier 1: 2.9 ms against 1.4 ms; the batched continuation 42 ms against 11 ms),
+#: while each distinct batch size compiles its own program (10-15 s): batches of 2 to 8
+#: share one. One set keeps its own (the single fold pair's time); the retry tiers, whose
+#: batches are the failures of a batch, always take at least 8 (``retry_size``).
 MIN_BATCH = 8
 
 
 def bucket(k: int) -> int:
-    """The padded size of a batch of k: ``MIN_BATCH`` (8) up to 8, then m 2^j with m in 8..15
-    (at most 1/8 of padding): programs compile once per bucket, not per batch size."""
+    """The padded size of a batch of k: 1 for one set, ``MIN_BATCH`` (8) for 2 to 8, then
+    m 2^j with m in 8..15 (at most 1/8 of padding): programs compile once per bucket, not
+    per batch size."""
+    if k <= 1:
+        return 1
     if k <= MIN_BATCH:
         return MIN_BATCH
     j = (k - 1).bit_length() - 4
     return -(-k // (1 << j)) * (1 << j)
+
+
+def retry_size(k: int) -> int:
+    """The padded size of a retry tier's batch of k failures: ``bucket``, at least 8."""
+    return max(MIN_BATCH, bucket(k))
 
 
 def padded(arrays, size: int | None = None):
@@ -420,17 +430,18 @@ def resolve_failures(G, M, D, alphas, status, tier, n: int = 12):
     updated in place; alphas (K, 2) the folds in radians): the one-mode brackets from
     RETRY_CELLS cells per end, then the batched continuation from the straight rod (which
     also certifies NOT_BISTABLE and FOLD_BEYOND_90), then ``locate_folds`` one by one. The
-    batched tiers run in float64 on padded batches (``bucket``)."""
+    batched tiers run in float64 on padded batches (``retry_size``)."""
     retry = np.nonzero(status == NOT_CONVERGED)[0]
     if retry.size:  # tier 2
-        a2, ok2 = jax.device_get(batch_fold_angles_program(*padded([G[retry], M[retry], D[retry]]),
-                                                n=n, cells=RETRY_CELLS))
+        a2, ok2 = jax.device_get(batch_fold_angles_program(
+            *padded([G[retry], M[retry], D[retry]], retry_size(retry.size)), n=n,
+            cells=RETRY_CELLS))
         a2, ok2 = np.asarray(a2)[:retry.size], np.asarray(ok2)[:retry.size]
         alphas[retry[ok2]], status[retry[ok2]], tier[retry] = a2[ok2], BISTABLE, 2
         retry = retry[~ok2]
     if retry.size:  # tier 3
         z3, code = jax.device_get(_continuation_program(
-            *padded([G[retry], M[retry], D[retry]]), n=n))
+            *padded([G[retry], M[retry], D[retry]], retry_size(retry.size)), n=n))
         a3, code = np.asarray(z3)[:retry.size, :, -1], np.asarray(code)[:retry.size]
         alphas[retry], status[retry], tier[retry] = a3, code, 3
         retry = retry[code == NOT_CONVERGED]
