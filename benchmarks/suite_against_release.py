@@ -12,6 +12,7 @@ pytest's JUnit XML (call time with its setup and teardown, summed over the worke
 wall time).
 
 Run:  python benchmarks/suite_against_release.py [--release REV] [--name NAME]
+      [--this-junit FILE --this-wall-s S]  (this tree's suite from a run made just before)
 Writes benchmarks/results/NAME.{json,md} (default suite_against_one_engine). About twice
 the suite's time.
 """
@@ -87,14 +88,27 @@ def run_suite(tree: Path, work: Path, label: str) -> dict:
             "summary": summary[-1] if summary else None, "times": times}
 
 
-def run(release: str) -> dict:
+def run(release: str, this_junit: Path | None = None, this_wall_s: float | None = None) -> dict:
+    """Both suites, the release first; with ``this_junit`` (and its wall time), this tree's
+    suite is the run that wrote that file (made just before, on the same machine, at this
+    tree's last commit) and only the release's runs here."""
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         old = export_tree(release, work / "release")
-        this = export_tree("HEAD", work / "this-tree")
-        res = {"release": release, "this": _short("HEAD"),
-               "release_suite": run_suite(old, work, "release"),
-               "this_suite": run_suite(this, work, "this")}
+        release_suite = run_suite(old, work, "release")
+        if this_junit is None:
+            this_suite = run_suite(export_tree("HEAD", work / "this-tree"), work, "this")
+        else:
+            times = per_test_times(this_junit)
+            counts = {}
+            for t in times.values():
+                counts[t["outcome"]] = counts.get(t["outcome"], 0) + 1
+            this_suite = {"wall_s": this_wall_s, "returncode": int(
+                counts.get("failed", 0) + counts.get("error", 0) > 0), "counts": counts,
+                "summary": f"from {this_junit.name}", "times": times}
+        res = {"release": release, "this": _short("HEAD"), "release_suite": release_suite,
+               "this_suite": this_suite, "order": "the release first" if this_junit is None
+               else "this tree's just before the release's"}
     a, b = res["release_suite"]["times"], res["this_suite"]["times"]
     common = sorted(set(a) & set(b))
     res["common"] = {"tests": len(common),
@@ -131,8 +145,8 @@ def markdown(res: dict, machine: str) -> str:
     c, only = res["common"], res["only_this"]
     lines = [f"# The test suite: this tree ({res['this']}) against release {rel}", "",
              f"Machine: {machine}. One run of each suite (`python -m pytest`, one worker per "
-             "core), the release first; per-test times are pytest's (setup, call and "
-             "teardown), summed over the workers.", "",
+             f"core), {res.get('order', 'the release first')}; per-test times are pytest's "
+             "(setup, call and teardown), summed over the workers.", "",
              f"| | this tree | release {rel} |", "|---|---|---|",
              f"| tests | {n(new)} | {n(old)} |",
              f"| failed or errors | {bad(new)} | {bad(old)} |",
@@ -162,8 +176,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--release", default=ONE_ENGINE)
     ap.add_argument("--name", default="suite_against_one_engine")
+    ap.add_argument("--this-junit", type=Path, default=None,
+                    help="JUnit XML of a run of this tree's suite made just before (with "
+                    "--this-wall-s): only the release's suite runs")
+    ap.add_argument("--this-wall-s", type=float, default=None)
     args = ap.parse_args()
-    res = run(args.release)
+    if (args.this_junit is None) != (args.this_wall_s is None):
+        ap.error("--this-junit and --this-wall-s go together")
+    res = run(args.release, args.this_junit, args.this_wall_s)
     machine = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores"
     out = HERE / "results"
     slim = {k: v for k, v in res.items()}
