@@ -26,8 +26,8 @@ import jax
 import numpy as np
 
 import jaxrod as jr
-from jaxrod.magnet.batch import fold_pairs_program, padded
-from jaxrod.programs import jit  # as jaxrod compiles its own programs
+from jaxrod.magnet.batch import fold_pairs_program
+from jaxrod.programs import jit, padded  # as jaxrod compiles its own programs
 
 HERE = Path(__file__).resolve().parent
 D_EXP = 11.25 / 9.2

@@ -11,11 +11,9 @@ from jaxrod.magnet.batch import (
     FOLD_BEYOND_90,
     NOT_BISTABLE,
     NOT_CONVERGED,
-    bucket,
     fold_pairs,
-    retry_size,
 )
-from jaxrod.programs import jit
+from jaxrod.programs import bucket, jit, retry_size
 
 D = 11.25 / 9.2
 

@@ -14,8 +14,8 @@ tiers, those of ``jaxrod.magnet.batch.fold_pairs``, so no point is dropped silen
    the first two folds refined by Moore-Spence), which also tells why there is no pair;
 4. points still failing there are retried by ``locate_folds`` itself, one by one.
 
-The retry tiers run on padded batches (``batch.bucket``), so that a map compiles each of their
-programs a few times, not once per number of failures.
+The retry tiers run on padded batches (``programs.retry_size``), so that a map compiles each
+of their programs a few times, not once per number of failures.
 
 Each point ends with a reason code (``REASONS``): OK, NOT_BISTABLE (the branch through the
 straight rod has fewer than two folds with alpha in (0, 180] degrees), FOLD_BEYOND_90 (a fold
@@ -60,11 +60,10 @@ from jaxrod.magnet.batch import (  # noqa: F401 (the reason codes, re-exported)
     STATUS,
     batch_fold_angles,
     batch_fold_angles_program,
-    bucket,
     resolve_failures,
 )
 from jaxrod.params import UNITS, ParameterError
-from jaxrod.programs import jit
+from jaxrod.programs import bucket, jit
 
 #: The reason codes of a map's points: ``jaxrod.magnet.batch.STATUS`` (OK is BISTABLE).
 OK, REASONS = BISTABLE, STATUS
@@ -173,7 +172,7 @@ def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
                  devices=None, size: int | None = None) -> dict[str, np.ndarray]:
     """Capture/release angles (deg), width and reason for rows of input ``values`` (K, P);
     ``size``: the batch the first tier runs (the rows padded to it; a map's chunk size, so
-    that its edge chunks run the same compiled program; default ``batch.bucket``)."""
+    that its edge chunks run the same compiled program; default ``programs.bucket``)."""
     devices = list(devices or jax.local_devices())
     k = values.shape[0]
     valid = _validity(point, values)

@@ -37,7 +37,7 @@ from jaxrod.magnet.diagram import default_options
 from jaxrod.magnet.folds import NEAR_SINGULAR, locate_folds, run_to_second_fold
 from jaxrod.magnet.reduction import normalised_mode
 from jaxrod.params import RANGES, ParameterError, check_degree
-from jaxrod.programs import jit
+from jaxrod.programs import bucket, jit, padded, retry_size  # noqa: F401 (bucket: its old home)
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
 from jaxrod.solvers import dense
 from jaxrod.solvers.continuation import REACHED_BOUND
@@ -332,41 +332,6 @@ class FoldPairs(NamedTuple):
         return [STATUS[int(c)] for c in self.status]
 
 
-#: The smallest padded batch of several sets: on a CPU a batch of 8 runs in 2-4x the time of
-#: a batch of 1 (tier 1: 2.9 ms against 1.4 ms; the batched continuation 42 ms against 11 ms),
-#: while each distinct batch size compiles its own program (10-15 s): batches of 2 to 8
-#: share one. One set keeps its own (the single fold pair's time); the retry tiers, whose
-#: batches are the failures of a batch, always take at least 8 (``retry_size``).
-MIN_BATCH = 8
-
-
-def bucket(k: int) -> int:
-    """The padded size of a batch of k: 1 for one set, ``MIN_BATCH`` (8) for 2 to 8, then
-    m 2^j with m in 8..15 (at most 1/8 of padding): programs compile once per bucket, not
-    per batch size."""
-    if k <= 1:
-        return 1
-    if k <= MIN_BATCH:
-        return MIN_BATCH
-    j = (k - 1).bit_length() - 4
-    return -(-k // (1 << j)) * (1 << j)
-
-
-def retry_size(k: int) -> int:
-    """The padded size of a retry tier's batch of k failures: ``bucket``, at least 8."""
-    return max(MIN_BATCH, bucket(k))
-
-
-def padded(arrays, size: int | None = None):
-    """The 1-D arrays padded to ``size`` (default ``bucket``) by repeating their first entry
-    (a valid parameter set; the padding's answers are dropped)."""
-    k = arrays[0].shape[0]
-    size = bucket(k) if size is None else size
-    if size == k:
-        return list(arrays)
-    return [np.concatenate([a, np.repeat(a[:1], size - k)]) for a in arrays]
-
-
 def continuation_pair(G, M, D, disc: PlanarDiscretisation):
     """(fold states (2, 2m + 1), status) of one parameter set by the ``locate_folds``
     algorithm (vmap it): the continuation in alpha from the straight rod up to 180 degrees
@@ -467,8 +432,8 @@ def fold_pairs(G, M, D, n: int = 12, dtype: str = "float64") -> FoldPairs:
     through ``resolve_failures`` (wider brackets, the batched continuation from the straight
     rod, ``locate_folds``), which either finds their folds or certifies that there are no two
     (NOT_BISTABLE) or that one lies beyond 90 degrees. NOT_CONVERGED remains only where every
-    solver failed. Batches are padded to a few sizes (``bucket``), so that a new K rarely
-    compiles a new program.
+    solver failed. Batches are padded to a few sizes (``jaxrod.programs.bucket``), so that a
+    new K rarely compiles a new program.
 
     The rows are validated first: a row outside ``jaxrod.params.RANGES`` (or NaN) raises
     ParameterError naming it. Matrix products run at full precision of ``dtype`` (GPUs
