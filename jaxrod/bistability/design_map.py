@@ -63,7 +63,7 @@ from jaxrod.magnet.batch import (  # noqa: F401 (the reason codes, re-exported)
     resolve_failures,
 )
 from jaxrod.params import UNITS, ParameterError
-from jaxrod.programs import bucket, jit
+from jaxrod.programs import bucket, jit, padded
 
 #: The reason codes of a map's points: ``jaxrod.magnet.batch.STATUS`` (OK is BISTABLE).
 OK, REASONS = BISTABLE, STATUS
@@ -161,11 +161,10 @@ def _sharded(arrays, mesh, size: int | None = None):
     the mesh's device count and lay them out over it (the points split between devices)."""
     k = arrays[0].shape[0]
     size = max(k, size or k)
-    pad = size - k + (-size) % mesh.size
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("points"))
     # padding repeats the first point (a valid parameter set), dropped afterwards
-    return [jax.device_put(np.concatenate([a, np.repeat(a[:1], pad)]), sharding)
-            for a in arrays], k
+    return [jax.device_put(a, sharding)
+            for a in padded(arrays, size + (-size) % mesh.size)], k
 
 
 def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,

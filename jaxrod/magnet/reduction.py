@@ -217,11 +217,11 @@ def _state_derivatives(theta, alpha, red: Reduction, scene, disc):
 
 def reduced_jet(q, alpha, red: Reduction, scene, disc):
     """(F, dF/dq, dF/dalpha, d2F/dq2, d2F/dq dalpha) at (q, alpha), in closed form from the
-    energy's assembled derivatives at theta = q psi + w(q, alpha) (``_jet``), theta, and
-    the inner w-solve's statistics."""
+    energy's assembled derivatives at theta = q psi + w(q, alpha) (``_jet``), theta, the
+    inner w-solve's statistics, and xi = psi + dw/dq (the Hessian's kernel at a fold)."""
     theta, stats = reduced_state(q, alpha, red, scene, disc)
     xi, theta_alpha = _state_derivatives(theta, alpha, red, scene, disc)
-    return _jet(theta, xi, theta_alpha, alpha, red, scene, disc), theta, stats
+    return _jet(theta, xi, theta_alpha, alpha, red, scene, disc), theta, stats, xi
 
 
 def one_mode_jet(q, alpha, red: Reduction, scene, disc):
@@ -298,10 +298,8 @@ def _reduced_fold_pair(scene: DipoleMagnet, disc: PlanarDiscretisation, tol):
     one = jax.vmap(lambda q, a: one_mode_fold(red, scene, disc, q, a))(q_start, a_start)
     full = jax.vmap(lambda x: reduced_fold(red, scene, disc, x[0], x[1], tol))(one.x)
 
-    def report(x):  # reduced_jet's parts, with xi (the Hessian's kernel) and the tip
-        theta, stats = reduced_state(x[0], x[1], red, scene, disc)
-        xi, theta_alpha = _state_derivatives(theta, x[1], red, scene, disc)
-        jet = _jet(theta, xi, theta_alpha, x[1], red, scene, disc)
+    def report(x):
+        jet, theta, stats, xi = reduced_jet(x[0], x[1], red, scene, disc)
         return (dict(zip(JET_NAMES, jet)), tip_angle(theta, disc), stats, theta, xi,
                 tip_position(theta, disc))
 
