@@ -353,7 +353,7 @@ def run(quick: bool, auto: bool, jaxcont: bool) -> dict:
     timing = jaxrod_timing()
     print(f"jaxrod: first call {timing['first_call_s']:.1f} s, warm "
           f"{1e3 * timing['warm_s']:.0f} ms", flush=True)
-    conv = convergence([8, 12] if quick else [6, 8, 10, 12, 16, 20], 16 if quick else 24)
+    conv = convergence([12] if quick else [6, 8, 10, 12, 16, 20], 16 if quick else 24)
     ref = conv["reference"]
     result = {"jaxrod": timing | {
         "cusp_D_error": abs(timing["cusp_D"] - ref["cusp_D"]),
