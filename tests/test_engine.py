@@ -291,3 +291,24 @@ def test_a_quasi_static_sweep_snaps_just_past_the_folds():
     steps = np.abs(np.diff(s.tip_angle_deg))
     assert steps[release - 1] > 10 * np.max(np.delete(steps, [release - 1, capture - 1]))
     assert s.snaps[0]["tip_before_deg"] > s.snaps[0]["tip_after_deg"]
+
+
+def test_the_generic_fold_curve_of_the_papers_scene_passes_its_cusp():
+    """The generic fold curve (any scene, its inputs by name) of the paper's scene, followed
+    in magnet.D, against the paper's own fold curves: its cusp bracket holds their refined
+    cusp, and its points are folds of the paper's diagram at their D."""
+    cusp = jr.fold_curves(jr.DesignPoint.from_groups(G, M, D), "D", 1.5, n=N).cusp
+    curve = jr.fold_curve(paper_scene(), "magnet.alpha", (0.0, math.pi / 2), "magnet.D",
+                          (D, 1.5), n=N)
+    (i,) = curve.cusp_indices
+    # the folds merge where D is largest: no point of the curve lies beyond the cusp's D, and
+    # the cusp lies between the two points around the sign change of F_qq (D and alpha are
+    # both stationary there, so that it need not lie within their range of either)
+    assert curve.along_values.max() <= cusp.value + 1e-12
+    bracket = np.stack([curve.along_values[i:i + 2], np.degrees(curve.values[i:i + 2])])
+    extent = np.abs(bracket[:, 1] - bracket[:, 0])
+    distance = np.abs(bracket - np.array([[cusp.value], [cusp.alpha_deg]]))
+    assert np.all(distance <= 1.01 * extent[:, None] + 1e-12)
+    for j in (0, i // 2, (i + len(curve.values)) // 2):  # both folds, away from the cusp
+        at = jr.folds(jr.magnet_scene(G, M, float(curve.along_values[j])), n=N).folds
+        assert min(abs(f.alpha_deg - math.degrees(curve.values[j])) for f in at) <= 1e-9
