@@ -26,7 +26,7 @@ from jaxrod.derivatives import Structured
 from jaxrod.equilibria.branch import check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, ramp
 from jaxrod.params import ParameterError
-from jaxrod.programs import jit
+from jaxrod.programs import jit, padded
 from jaxrod.progress import Interrupted, interrupt_requested, progress_bar
 from jaxrod.scenes.scene import Input, Scene
 from jaxrod.solvers.continuation import REACHED_BOUND, ContinuationOptions, continuation_run
@@ -134,10 +134,10 @@ def _solve_chunk(X, Y, scene, disc, start, span, vary, x_key, y_key, devices, ch
     program, mesh = _per_device(tuple(devices), vary, x_key, y_key)
     k = X.size
     size = -(-chunk * chunk // mesh.size) * mesh.size
-    pad = np.concatenate([np.arange(k), np.full(size - k, k - 1)])
+    X, Y = padded([X, Y], size)
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("points"))
-    got = jax.device_get(program(jax.device_put(X[pad], sharding),
-                                 jax.device_put(Y[pad], sharding), scene, disc, start, span))
+    got = jax.device_get(program(jax.device_put(X, sharding), jax.device_put(Y, sharding),
+                                 scene, disc, start, span))
     return [np.asarray(g)[:k] for g in got]
 
 
