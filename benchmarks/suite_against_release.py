@@ -64,10 +64,14 @@ def per_test_times(junit: Path) -> dict[str, dict]:
     return out
 
 
-def run_suite(tree: Path, work: Path, label: str) -> dict:
+def run_suite(tree: Path, work: Path, label: str, path: tuple[Path, ...] = (),
+              env_extra: dict | None = None) -> dict:
+    """The suite of ``tree`` as the README runs it, that tree's package first on the path
+    (then ``path``), a fresh cache folder, and ``env_extra`` in its environment."""
     junit = work / f"{label}.xml"
     cache = work / f"{label}-cache"
-    env = os.environ | {"PYTHONPATH": str(tree), "JAXROD_CACHE_DIR": str(cache)}
+    env = os.environ | {"PYTHONPATH": os.pathsep.join(map(str, (tree, *path))),
+                        "JAXROD_CACHE_DIR": str(cache)} | (env_extra or {})
     env.pop("JAX_COMPILATION_CACHE_DIR", None)
     t0 = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",

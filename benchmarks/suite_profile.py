@@ -27,15 +27,14 @@ import argparse
 import json
 import os
 import platform
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from suite_against_release import _by_module, _short, export_tree, per_test_times  # noqa: E402
+from common import write_results  # noqa: E402
+from suite_against_release import _by_module, _short, export_tree, run_suite  # noqa: E402
 
 #: pytest's own process: it waits for the xdist workers (not counted in the totals).
 CONTROLLER = "pytest's controller (waits for the workers)"
@@ -162,25 +161,13 @@ def run() -> dict:
         recorder = work / "recorder"
         recorder.mkdir()
         (recorder / "sitecustomize.py").write_text(RECORDER % {"small": SMALL})
-        events, junit = work / "events.jsonl", work / "suite.xml"
-        env = os.environ | {"PYTHONPATH": os.pathsep.join([str(tree), str(recorder)]),
-                            "JAXROD_CACHE_DIR": str(work / "cache"),
-                            "JAXROD_SUITE_PROFILE": str(events)}
-        env.pop("JAX_COMPILATION_CACHE_DIR", None)
-        t0 = time.perf_counter()
-        proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                               f"--junitxml={junit}"], cwd=tree, env=env, capture_output=True,
-                              text=True)
-        wall = time.perf_counter() - t0
+        events = work / "events.jsonl"
+        suite = run_suite(tree, work, "this", path=(recorder,),
+                          env_extra={"JAXROD_SUITE_PROFILE": str(events)})
         records = [json.loads(x) for x in events.read_text().splitlines()] \
             if events.exists() else []
-        times = per_test_times(junit) if junit.exists() else {}
-    counts: dict[str, int] = {}
-    for t in times.values():
-        counts[t["outcome"]] = counts.get(t["outcome"], 0) + 1
-    summary = [x for x in proc.stdout.splitlines() if " in " in x]
-    return {"tree": _short("HEAD"), "wall_s": wall, "returncode": proc.returncode,
-            "counts": counts, "summary": summary[-1] if summary else None,
+    times = suite.pop("times")
+    return {"tree": _short("HEAD"), **suite,
             "test_s": sum(t["s"] for t in times.values()), "by_module": _by_module(times),
             **summarise(records)}
 
@@ -226,11 +213,8 @@ def main() -> None:
     parser.add_argument("--name", default="suite_profile")
     args = parser.parse_args()
     res = run()
-    machine = f"{platform.machine()}, {os.cpu_count()} cores"
-    out = HERE / "results"
-    (out / f"{args.name}.json").write_text(json.dumps(res, indent=1))
-    (out / f"{args.name}.md").write_text(markdown(res, machine))
-    print(markdown(res, machine))
+    write_results(HERE / "results", args.name, res,
+                  markdown(res, f"{platform.machine()}, {os.cpu_count()} cores"))
 
 
 if __name__ == "__main__":
