@@ -86,7 +86,7 @@ def error(found, ref):
 
 
 def run(quick: bool, auto: bool) -> dict:
-    ns_ms = [8, 12] if quick else [4, 5, 6, 7, 8, 10, 12, 16, 24]
+    ns_ms = [12] if quick else [4, 5, 6, 7, 8, 10, 12, 16, 24]
     ns_reduced = [12] if quick else [6, 8, 12, 16]
     ns_cont = [12] if quick else [8, 16]
     repeat = 3 if quick else 20

@@ -98,7 +98,9 @@ def _start_states(scene, n):
 
 
 def run(quick: bool) -> dict:
-    degrees = [8, 12] if quick else [6, 8, 10, 12, 16, 20, 24, 32]
+    # (quick: N = 8, where the error is far above round-off, so that 3D = planar means
+    # something)
+    degrees = [8] if quick else [6, 8, 10, 12, 16, 20, 24, 32]
     rows = []
     for e_gpa, (G, M) in CASES.items():
         scene = jr.magnet_scene(G, M, D_EXP)
@@ -193,7 +195,7 @@ def write(result: dict, out: Path) -> None:
 
 
 def main(argv=None) -> int:
-    return benchmark_main(__doc__, run, write, argv, quick_help="N = 8, 12 only")
+    return benchmark_main(__doc__, run, write, argv, quick_help="N = 8 only")
 
 
 if __name__ == "__main__":
