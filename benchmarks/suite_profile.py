@@ -38,6 +38,8 @@ from suite_against_release import _by_module, _short, export_tree, run_suite  # 
 
 #: pytest's own process: it waits for the xdist workers (not counted in the totals).
 CONTROLLER = "pytest's controller (waits for the workers)"
+#: The xdist workers: they run the tests, and wait for the processes that tests start.
+WORKERS = "test workers"
 
 #: Compilations shorter than this (seconds) are counted as eager single operations.
 SMALL = 0.15
@@ -71,6 +73,7 @@ def _listen(event, duration, **kw):
 
 def _write():
     record = {"argv": [os.path.basename(a) for a in sys.argv[:2]], "wall_s": time.time() - _t0,
+              "worker": "PYTEST_XDIST_WORKER" in os.environ and "xdist" in sys.modules,
               "events": _events, "programs": _programs}
     with open(_out, "a") as f:
         f.write(json.dumps(record) + "\\n")
@@ -103,7 +106,10 @@ if _out:
 '''
 
 
-def _kind(argv: list[str]) -> str:
+def _kind(record: dict) -> str:
+    if record.get("worker"):
+        return WORKERS
+    argv = record["argv"]
     first = argv[0] if argv else ""
     if first.endswith(".py") and first not in ("__main__.py", "ipykernel_launcher.py"):
         return "benchmark scripts"
@@ -113,7 +119,7 @@ def _kind(argv: list[str]) -> str:
                                                                                   "-p"):
         return "command lines"
     if first == "-c":
-        return "test workers (and other -c processes)"
+        return "python -c snippets"
     if first == "__main__.py":
         return CONTROLLER
     return "other"
@@ -125,7 +131,7 @@ def summarise(records: list[dict]) -> dict:
     for r in records:
         ev = r["events"]
         get = lambda k: ev.get(f"/jax/core/compile/{k}", [0.0, 0])[0]  # noqa: E731
-        k = kinds.setdefault(_kind(r["argv"]), {"processes": 0, "wall_s": 0.0, "trace_s": 0.0,
+        k = kinds.setdefault(_kind(r), {"processes": 0, "wall_s": 0.0, "trace_s": 0.0,
                                                 "lower_s": 0.0, "compile_s": 0.0,
                                                 "cache_load_s": 0.0})
         k["processes"] += 1
@@ -146,7 +152,10 @@ def summarise(records: list[dict]) -> dict:
     big = [dict(name=n, **p) for n, p in programs.items()
            if p["compiles"] and p["compile_s"] / p["compiles"] >= SMALL]
     total = {key: sum(k[key] for name, k in kinds.items() if name != CONTROLLER)
-             for key in ("wall_s", "trace_s", "lower_s", "compile_s", "cache_load_s")}
+             for key in ("trace_s", "lower_s", "compile_s", "cache_load_s")}
+    # the workers wait for the processes their tests start: their time is counted there
+    total["work_s"] = sum(k["wall_s"] for name, k in kinds.items() if name != CONTROLLER) \
+        - sum(k["wall_s"] for name, k in kinds.items() if name not in (CONTROLLER, WORKERS))
     return {"kinds": kinds, "total": total, "small_programs": small,
             "jitted_programs": {"compiles": sum(p["compiles"] for p in big),
                                 "compile_s": sum(p["compile_s"] for p in big),
@@ -178,13 +187,15 @@ def markdown(res: dict, machine: str) -> str:
     lines = [f"# Where the test suite's time goes ({res['tree']})", "",
              f"Machine: {machine}. One run of the suite as the README runs it "
              "(`benchmarks/suite_profile.py`); times are summed over processes (work, not "
-             "wall time).", "",
+             "wall time); a test worker's own time includes its waiting for the processes "
+             "its tests start.", "",
              f"- wall time: {res['wall_s'] / 60:.1f} min, tests: "
              + ", ".join(f"{v} {k}" for k, v in sorted(res["counts"].items())),
-             f"- the processes' own time: {t['wall_s']:.0f} s, of which JAX's tracing "
+             f"- work (the processes' time, less the workers' waiting for the processes "
+             f"their tests start): {t['work_s']:.0f} s, of which JAX's tracing "
              f"{t['trace_s']:.0f} s, lowering {t['lower_s']:.0f} s, XLA compilation "
              f"{t['compile_s']:.0f} s and loads from the compilation cache "
-             f"{t['cache_load_s']:.0f} s: {jax_s:.0f} s ({100 * jax_s / t['wall_s']:.0f}%)",
+             f"{t['cache_load_s']:.0f} s: {jax_s:.0f} s ({100 * jax_s / t['work_s']:.0f}%)",
              f"- jitted programs: {res['jitted_programs']['compiles']} compilations "
              f"({res['jitted_programs']['compile_s']:.0f} s) and their tracing "
              f"({res['jitted_programs']['trace_s']:.0f} s); eager single operations: "
