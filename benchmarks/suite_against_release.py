@@ -96,12 +96,13 @@ def run(release: str, this_junit: Path | None = None, this_wall_s: float | None 
     """Both suites, the release first; with ``this_junit`` (and its wall time), this tree's
     suite is the run that wrote that file (made just before, on the same machine, at this
     tree's last commit) and only the release's runs here."""
+    this = _short("HEAD")  # now: the working tree's commits may move on while the suites run
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         old = export_tree(release, work / "release")
         release_suite = run_suite(old, work, "release")
         if this_junit is None:
-            this_suite = run_suite(export_tree("HEAD", work / "this-tree"), work, "this")
+            this_suite = run_suite(export_tree(this, work / "this-tree"), work, "this")
         else:
             times = per_test_times(this_junit)
             counts = {}
@@ -110,7 +111,7 @@ def run(release: str, this_junit: Path | None = None, this_wall_s: float | None 
             this_suite = {"wall_s": this_wall_s, "returncode": int(
                 counts.get("failed", 0) + counts.get("error", 0) > 0), "counts": counts,
                 "summary": f"from {this_junit.name}", "times": times}
-        res = {"release": release, "this": _short("HEAD"), "release_suite": release_suite,
+        res = {"release": release, "this": this, "release_suite": release_suite,
                "this_suite": this_suite, "order": "the release first" if this_junit is None
                else "this tree's just before the release's"}
     a, b = res["release_suite"]["times"], res["this_suite"]["times"]

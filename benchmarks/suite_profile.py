@@ -164,9 +164,10 @@ def summarise(records: list[dict]) -> dict:
 
 
 def run() -> dict:
+    rev = _short("HEAD")  # now: the working tree's commits may move on while the suite runs
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
-        tree = export_tree("HEAD", work / "tree")
+        tree = export_tree(rev, work / "tree")
         recorder = work / "recorder"
         recorder.mkdir()
         (recorder / "sitecustomize.py").write_text(RECORDER % {"small": SMALL})
@@ -176,7 +177,7 @@ def run() -> dict:
         records = [json.loads(x) for x in events.read_text().splitlines()] \
             if events.exists() else []
     times = suite.pop("times")
-    return {"tree": _short("HEAD"), **suite,
+    return {"tree": rev, **suite,
             "test_s": sum(t["s"] for t in times.values()), "by_module": _by_module(times),
             **summarise(records)}
 
