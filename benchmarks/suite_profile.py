@@ -12,8 +12,8 @@ is a ``sitecustomize`` module on the suite's ``PYTHONPATH`` (it shadows any othe
 this run); it registers its listener once JAX has been imported, so that a process's own
 start-up (and its Ctrl-C handling while JAX is imported) is unchanged.
 
-Programs are counted by name: "small" programs (under 0.15 s of compilation each) are the
-single operations that eager code compiles for each new shape; the others are jitted
+Programs are counted by name: "small" programs (under 0.15 s of compilation on average)
+are the single operations that eager code compiles for each new shape; the others are jitted
 programs. Processes that start others (a test worker waiting for a benchmark script) count
 their own work only: the times add up across processes as work, not wall time.
 
@@ -60,12 +60,11 @@ def _listen(event, duration, **kw):
     name = name[4:-1] if name.startswith("jit(") else name
     kind = event.rsplit("/", 1)[-1]
     if kind in ("backend_compile_duration", "jaxpr_trace_duration"):
-        rec = _programs.setdefault(name, {"compile_s": 0.0, "compiles": 0, "small": 0,
+        rec = _programs.setdefault(name, {"compile_s": 0.0, "compiles": 0,
                                           "trace_s": 0.0, "traces": 0})
         if kind == "backend_compile_duration":
             rec["compile_s"] += duration
             rec["compiles"] += 1
-            rec["small"] += duration < %(small)r
         else:
             rec["trace_s"] += duration
             rec["traces"] += 1
@@ -142,13 +141,14 @@ def summarise(records: list[dict]) -> dict:
         k["cache_load_s"] += ev.get("/jax/compilation_cache/cache_retrieval_time_sec",
                                     [0.0, 0])[0]
         for name, p in r["programs"].items():
-            q = programs.setdefault(name, {"compile_s": 0.0, "compiles": 0, "small": 0,
+            q = programs.setdefault(name, {"compile_s": 0.0, "compiles": 0,
                                            "trace_s": 0.0, "traces": 0})
             for key in q:
                 q[key] += p[key]
-    small = {"compiles": sum(p["small"] for p in programs.values())}
-    small["compile_s"] = sum(p["compile_s"] for p in programs.values()
-                             if p["compiles"] and p["compile_s"] / p["compiles"] < SMALL)
+    small = [p for p in programs.values()
+             if p["compiles"] and p["compile_s"] / p["compiles"] < SMALL]
+    small = {"compiles": sum(p["compiles"] for p in small),
+             "compile_s": sum(p["compile_s"] for p in small)}
     big = [dict(name=n, **p) for n, p in programs.items()
            if p["compiles"] and p["compile_s"] / p["compiles"] >= SMALL]
     total = {key: sum(k[key] for name, k in kinds.items() if name != CONTROLLER)
@@ -170,7 +170,7 @@ def run() -> dict:
         tree = export_tree(rev, work / "tree")
         recorder = work / "recorder"
         recorder.mkdir()
-        (recorder / "sitecustomize.py").write_text(RECORDER % {"small": SMALL})
+        (recorder / "sitecustomize.py").write_text(RECORDER)
         events = work / "events.jsonl"
         suite = run_suite(tree, work, "this", path=(recorder,),
                           env_extra={"JAXROD_SUITE_PROFILE": str(events)})
