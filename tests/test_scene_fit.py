@@ -1,8 +1,11 @@
 """Fits and designs on any scene file: the rail rig's inputs from its folds (computed by
-shooting, an independent method), and a design verified by shooting at the answer."""
+shooting, an independent method), a design verified by shooting at the answer, and the
+generic fit of the paper's rig against the paper's own calibration program."""
 
 import json
+import math
 
+import numpy as np
 import pytest
 from test_scene_files import RAIL, _cli, rail_folds_by_shooting
 
@@ -86,3 +89,36 @@ def test_cli_fit_and_design_on_a_scene_file(rail):
                 "--folds", "1.0", "--free", "rod.length")
     assert proc.returncode == 2 and "rod.length" in proc.stderr.strip().splitlines()[-1]
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_the_generic_fit_of_the_papers_scene_agrees_with_the_papers_fit():
+    """One fit, two programs: the paper's calibration (``jr.fit`` on the physical experiment,
+    four switching angles, the offset fixed, the magnet's remanence free: M is proportional
+    to it) and the generic ``fit_folds`` on the same rig as a scene of terms (M free), both
+    at N = 12, on angles with unequal errors. With the offset fixed the four angles' squared
+    residuals are 2 (l - (m3 - m1) / 2)^2 + 2 (u - (m2 - m4) / 2)^2 plus a constant, so the
+    generic fit of those two folds has the same minimiser and, with sigma of 1 degree in
+    radians, a relative standard deviation sqrt(2) times the paper's (half the information)."""
+    from jaxrod.inverse.fit import default_point, fit
+
+    point = default_point()
+    G, M, D = point.groups()
+    lower, upper = (f.alpha_deg for f in jr.folds(jr.DipoleMagnet(G, 0.9 * M, D, 0.0),
+                                                  n=12).folds)
+    measured = np.array([-lower - 0.4, upper + 0.3, lower + 0.2, -upper + 0.5])
+    paper = fit(measured, free=("remanence",), point=point)
+    assert paper.converged, paper.reason
+    ratio = paper.estimates["remanence"] / point.values[point.index("remanence")]
+
+    # along the magnet's angle from 0 the branch meets the upper fold first, then turns back
+    # to the lower one (the order fit_folds takes its data in)
+    data = np.radians([(measured[1] - measured[3]) / 2, (measured[2] - measured[0]) / 2])
+    generic = fit_folds(jr.DipoleMagnet(G, M, D, 0.0).scene, "magnet.alpha",
+                        (0.0, 0.5 * np.pi), data, ["magnet.M"], sigma=np.radians(1.0), n=12)
+    assert generic.converged, generic.reason
+    assert abs(generic.estimates["magnet.M"] / (ratio * M) - 1.0) <= 1e-10
+    relative_std = generic.std["magnet.M"] / generic.estimates["magnet.M"]
+    paper_std = paper.std["remanence"] / paper.estimates["remanence"]
+    assert abs(relative_std / (math.sqrt(2.0) * paper_std) - 1.0) <= 1e-9
+    assert np.allclose(np.degrees(generic.folds), [paper.model_deg[1], paper.model_deg[2]],
+                       atol=1e-9, rtol=0)
