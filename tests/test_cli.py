@@ -139,9 +139,13 @@ def test_track_json_and_files(tmp_path, capsys):
     assert out["converged"] and len(out["folds"]) == 2 and out["max_out_of_plane"] > 0.5
     # the rod snaps where the magnet's polar angle reaches the planar folds (cf. `folds`)
     assert main(["folds", *MAGNET, "--json"]) == 0
-    planar = sorted(f["alpha_deg"] for f in json.loads(capsys.readouterr().out)["folds"])
+    found = json.loads(capsys.readouterr().out)["folds"]
+    planar = sorted(f["alpha_deg"] for f in found)
     polar = sorted(f["magnet_polar_deg"] for f in out["folds"])
     assert polar == pytest.approx(planar, abs=1e-9)
+    # with the tip leaning as far as in the plane (its polar angle the planar tip angle)
+    tips = sorted(f["tip_polar_deg"] for f in out["folds"])
+    assert tips == pytest.approx(sorted(f["tip_deg"] for f in found), abs=1e-9)
     lines = (tmp_path / "track.csv").read_text().splitlines()
     assert lines[0].startswith("t_deg,") and len(lines) == out["points"] + 1
     with pytest.raises(SystemExit) as stop:

@@ -43,7 +43,9 @@ def test_3d_post_buckled_branch_reproduces_the_a2_formula(support, G, kind):
 
 def test_magnet_track_leaving_the_plane_snaps_where_the_planar_folds_are():
     scene = magnet.make_scene(2.2, 0.0236, D)
-    planar = {f.kind: f.alpha_deg for f in magnet_folds.locate_folds(scene, n=16).folds}
+    found = magnet_folds.locate_folds(scene, n=16).folds
+    planar = {f.kind: f.alpha_deg for f in found}
+    planar_tip = {f.kind: f.tip_deg for f in found}
     track = trace_track(scene, alpha0_deg=20.0, tilt_deg=90.0, n=16)
     assert track.status == (jr.Status.REACHED_BOUND,) and track.complete and track.vary == "t"
     assert track.out_of_plane.max() > 0.5  # genuinely 3D states
@@ -54,6 +56,13 @@ def test_magnet_track_leaving_the_plane_snaps_where_the_planar_folds_are():
         # planar fold angle, with the rod leaning towards the magnet's azimuth
         assert abs(fold.magnet_polar_deg - planar[kind]) < 1e-9
         assert abs(fold.rod_azimuth_deg - fold.magnet_azimuth_deg) < 1e-9
+        # ... and the tip leaning as far as in the plane: its polar angle is the planar
+        # fold's tip angle; its angle from +z toward +x is that of the tip position, as for
+        # every special point and the branch's column
+        assert abs(fold.tip_polar_deg - planar_tip[kind]) < 1e-9
+        X = fold.tip_position
+        assert abs(fold.tip_angle_deg - math.degrees(math.atan2(X[0], X[2]))) < 1e-12
+        assert abs(fold.tip_angle_deg - fold.tip_polar_deg) > 1.0  # off the xz-plane
         assert abs(fold.hessian_smallest[0]) < 1e-9 < fold.hessian_smallest[1]
     assert 0.0 < lower.t_deg < upper.t_deg
     stable = track.stable & (track.t_deg < upper.t_deg)

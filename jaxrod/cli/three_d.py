@@ -59,7 +59,8 @@ def cmd_track(args) -> int:
     scene, info = _magnet_scene_from_args(args)
     path = _output_dir(args.out) if args.out is not None else None
     track = trace_track(scene, args.alpha0, args.tilt, n=args.n, t_max_deg=args.t_max)
-    folds = [{"t_deg": f.t_deg, "magnet_polar_deg": f.magnet_polar_deg,
+    folds = [{"t_deg": f.t_deg, "tip_angle_deg": f.tip_angle_deg,
+              "tip_polar_deg": f.tip_polar_deg, "magnet_polar_deg": f.magnet_polar_deg,
               "magnet_azimuth_deg": f.magnet_azimuth_deg, "rod_azimuth_deg": f.rod_azimuth_deg,
               "hessian_smallest": list(f.hessian_smallest), "converged": f.converged,
               "residual_norm": f.residual_norm} for f in track.folds]

@@ -119,9 +119,13 @@ def _refine(x0, t0, scene: DipoleMagnet, track: GreatCircleTrack, disc: Director
 class TrackFold(SpecialPoint):
     """A fold of the 3D branch along the track, refined by Moore-Spence: a special point
     (``jaxrod.equilibria.record.SpecialPoint``, ``vary`` = "t", the track's parameter, and
-    ``value`` in radians; ``tip_angle_deg`` the tip's polar angle from +z) with the magnet's
-    direction there, the rod's azimuth and the Hessian's two smallest eigenvalues."""
+    ``value`` in radians; ``tip_angle_deg`` the tip position's angle from +z toward +x, as
+    for every special point and the branch's ``tip``) with the tip's polar angle from +z
+    (``tip_polar_deg``: the lean of the tip whatever its azimuth; equal to ``tip_angle_deg``
+    only in the xz-plane), the magnet's direction there, the rod's azimuth and the Hessian's
+    two smallest eigenvalues."""
 
+    tip_polar_deg: float
     magnet_polar_deg: float
     magnet_azimuth_deg: float
     rod_azimuth_deg: float
@@ -210,7 +214,9 @@ def trace_track(scene: DipoleMagnet, alpha0_deg: float = 20.0, tilt_deg: float =
         tip_polar, tip_azimuth = _polar_azimuth(tip)
         conv = bool(fold.newton.converged)
         folds.append(TrackFold(
-            vary="t", value=float(fold.lam), tip_angle_deg=math.degrees(float(tip_polar)),
+            vary="t", value=float(fold.lam),
+            tip_angle_deg=math.degrees(math.atan2(float(tip[0]), float(tip[2]))),
+            tip_polar_deg=math.degrees(float(tip_polar)),
             tip_position=np.asarray(tip), state=np.asarray(fold.x),
             null_vector=np.asarray(fold.null_vector), converged=conv,
             residual_norm=float(fold.newton.residual_norm),
