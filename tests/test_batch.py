@@ -13,7 +13,7 @@ from jaxrod.magnet.batch import (
     NOT_CONVERGED,
     fold_pairs,
 )
-from jaxrod.programs import bucket, jit, retry_size
+from jaxrod.programs import bucket, jit, padded, retry_size
 
 D = 11.25 / 9.2
 
@@ -110,6 +110,9 @@ def test_batch_sizes_are_bucketed():
     assert len({bucket(k) for k in range(1025, 2049)}) == 8
     assert all(bucket(k) >= k for k in range(1, 5000))
     assert all(bucket(k) <= 1.125 * k + 1 for k in range(9, 5000))
+    # padding repeats the first set, up to the size rounded to a multiple of the devices
+    (a,) = padded([np.arange(1.0, 6.0)], 9, multiple=4)
+    assert a.tolist() == [1.0, 2.0, 3.0, 4.0, 5.0] + [1.0] * 7
 
 
 def test_small_clearances_found_from_the_first_bracketing_cells():

@@ -164,7 +164,7 @@ def _sharded(arrays, mesh, size: int | None = None):
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("points"))
     # padding repeats the first point (a valid parameter set), dropped afterwards
     return [jax.device_put(a, sharding)
-            for a in padded(arrays, size + (-size) % mesh.size)], k
+            for a in padded(arrays, size, multiple=mesh.size)], k
 
 
 def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,

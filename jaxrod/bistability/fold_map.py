@@ -133,8 +133,7 @@ def _solve_chunk(X, Y, scene, disc, start, span, vary, x_key, y_key, devices, ch
     devices, and laid out over them."""
     program, mesh = _per_device(tuple(devices), vary, x_key, y_key)
     k = X.size
-    size = -(-chunk * chunk // mesh.size) * mesh.size
-    X, Y = padded([X, Y], size)
+    X, Y = padded([X, Y], chunk * chunk, multiple=mesh.size)
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("points"))
     got = jax.device_get(program(jax.device_put(X, sharding), jax.device_put(Y, sharding),
                                  scene, disc, start, span))
