@@ -1,5 +1,6 @@
-"""How jaxrod's programs are compiled: ``jit``, which is ``jax.jit`` with XLA options, and the
-batch sizes batched programs are compiled for (``bucket``, ``padded``).
+"""How jaxrod's programs are compiled: ``jit``, which is ``jax.jit`` with XLA options, the
+batch sizes batched programs are compiled for (``bucket``, ``padded``) and the lengths that
+time-stepping loops are compiled for (``loop_length``, ``scan_first``).
 
 jaxrod's solvers are small dense linear algebra inside nested ``lax.while_loop``s, and on a
 CPU most of a first call is XLA's code generation for a few hundred small fused kernels.
@@ -26,6 +27,7 @@ import inspect
 from collections.abc import Callable
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 #: XLA options for jaxrod's programs (module docstring).
@@ -76,7 +78,9 @@ class Program:
     are passed as float64 and int64 scalars: JAX gives Python numbers a weak type and compiles
     a program for them apart from the one for numpy numbers of the same shape, so that a
     scene made of Python floats and one made of numpy floats compiled twice (jaxrod's programs
-    compute in float64; the float32 path casts its inputs itself).
+    compute in float64; the float32 path casts its inputs itself). For the same reason every
+    call is put in one form, its arguments bound to the signature with the defaults filled
+    in: ``f(x)``, ``f(x, n=12)`` and ``f(x, 12)`` are one call to JAX, not three programs.
     """
 
     def __init__(self, fn: Callable, **kwargs):
@@ -91,7 +95,8 @@ class Program:
         numbers = kwargs.get("static_argnums", ())
         numbers = {numbers} if isinstance(numbers, int) else set(numbers)
         try:
-            params = list(inspect.signature(fn).parameters)
+            self._signature = inspect.signature(fn)
+            params = list(self._signature.parameters)
         except (TypeError, ValueError):  # no signature: leave the inputs as they are
             params = None
         self._static_names = names | {params[i] for i in numbers if params and i < len(params)}
@@ -102,6 +107,9 @@ class Program:
         """The call's dynamic inputs with Python numbers made strongly typed (class docstring)."""
         if not self._canonical:
             return args, kwargs
+        bound = self._signature.bind(*args, **kwargs)  # one form per call (class docstring)
+        bound.apply_defaults()
+        args, kwargs = bound.args, bound.kwargs
         args = tuple(a if i in self._static_positions else jax.tree_util.tree_map(_strong, a)
                      for i, a in enumerate(args))
         kwargs = {k: v if k in self._static_names else jax.tree_util.tree_map(_strong, v)
@@ -174,3 +182,27 @@ def padded(arrays, size: int | None = None, multiple: int = 1):
     if size == k:
         return list(arrays)
     return [np.concatenate([a, np.repeat(a[:1], size - k)]) for a in arrays]
+
+
+# --- loop lengths: one program per doubling of a step count, not per step count ----------
+
+def loop_length(steps: int) -> int:
+    """The compiled length of a loop of ``steps`` steps: the next power of two, at least 8
+    (``scan_first``): a time step halved in a convergence study, or a longer run, reuses the
+    program of the step counts of its doubling instead of compiling one for each count."""
+    return max(8, 1 << (int(steps) - 1).bit_length())
+
+
+def scan_first(step, carry, steps, length: int):
+    """``jax.lax.scan(step, carry, jnp.arange(length))`` that takes only its first ``steps``
+    steps (``steps`` traced, at most ``length``): each later step keeps the carry and gives
+    zeros (a ``lax.cond``, so it costs nothing where the loop is not under ``vmap``; under
+    ``vmap`` both branches run). Returns (the carry after ``steps`` steps, the outputs of
+    all ``length`` steps: keep the first ``steps``)."""
+    shapes = jax.eval_shape(step, carry, jnp.asarray(0))[1]
+
+    def hold(c, k):
+        return c, jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
+
+    return jax.lax.scan(lambda c, k: jax.lax.cond(k < steps, step, hold, c, k), carry,
+                        jnp.arange(length))
