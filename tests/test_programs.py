@@ -9,7 +9,9 @@ from jaxrod.programs import jit, loop_length, scan_first
 
 
 def test_one_program_whatever_the_call_form():
-    """f(x), f(x, n=3), f(x, 3), f(x=x) and a Python float or a numpy float: one trace."""
+    """f(x), f(x, n=3), f(x, 3) and f(x=x): one trace; a dynamic argument given (by position
+    or keyword, a Python or a numpy float) is an input, one more program; a new static
+    value, another."""
     traces = []
 
     @jit(static_argnames=("n",))
@@ -18,11 +20,13 @@ def test_one_program_whatever_the_call_form():
         return x * n * scale
 
     x = np.arange(4.0)
-    answers = [f(x), f(x, n=3), f(x, 3), f(x=x), f(x, 3, 1.0), f(x, scale=np.float64(1.0))]
-    assert all(np.array_equal(a, 3.0 * x) for a in answers)
+    answers = [f(x), f(x, n=3), f(x, 3), f(x=x)]
     assert traces == [3]
-    f(x, 4)  # a new static value is a new program
-    assert traces == [3, 4]
+    answers += [f(x, 3, 1.0), f(x, scale=np.float64(1.0)), f(scale=1.0, x=x, n=3)]
+    assert traces == [3, 3]
+    assert all(np.array_equal(a, 3.0 * x) for a in answers)
+    f(x, 4)
+    assert traces == [3, 3, 4]
 
 
 def test_loop_lengths_are_doublings():
