@@ -37,7 +37,7 @@ from jaxrod.dynamics.lagrangian import curvature_rate_form, kinetic, scene_at
 from jaxrod.dynamics.modes import positions
 from jaxrod.equilibria.equilibrium import DEFAULT_N, FIXED, discretise, tip, tip_tangent
 from jaxrod.params import ParameterError
-from jaxrod.programs import jit, loop_length, scan_first
+from jaxrod.programs import jit
 from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.newton import newton
 
@@ -79,7 +79,7 @@ def _momentum(q0, q1, h, c, scene_mid, disc):
         + _drag(q0, q1, c, scene_mid, disc)
 
 
-def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate, length):
+def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate):
     W = disc.quad_weights[:, None]
 
     def step(carry, k):
@@ -99,7 +99,7 @@ def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate, length):
                res.residual_norm)
         return (q1, q, p1), out
 
-    _, out = scan_first(step, (q0, q0, p0), steps, length)
+    _, out = jax.lax.scan(step, (q0, q0, p0), jnp.arange(steps))
     return out
 
 
@@ -144,7 +144,7 @@ def observe(scene1, disc, q1, v1):
             tip_tangent(scene1, q1, disc), X)
 
 
-def _run_bdf(scene, disc, q0, p0, h, steps, c, vary, start, rate, length):
+def _run_bdf(scene, disc, q0, p0, h, steps, c, vary, start, rate):
     def step(carry, k):
         q, qm, p, pm = carry
         at = scene_at(scene, vary, start, rate, (k + 1.0) * h)
@@ -155,13 +155,12 @@ def _run_bdf(scene, disc, q0, p0, h, steps, c, vary, start, rate, length):
         out = (res.x, *observe(at, disc, res.x, v1), res.converged, res.residual_norm)
         return (res.x, q, p1, p), out
 
-    _, out = scan_first(step, (q0, q0, p0, p0), steps, length)
+    _, out = jax.lax.scan(step, (q0, q0, p0, p0), jnp.arange(steps))
     return out
 
 
-# the step count is traced: one program per doubling of it (``programs.loop_length``)
-_program = jit(_run, static_argnames=("vary", "length"))
-_program_bdf = jit(_run_bdf, static_argnames=("vary", "length"))
+_program = jit(_run, static_argnames=("steps", "vary"))
+_program_bdf = jit(_run_bdf, static_argnames=("steps", "vary"))
 SCHEMES = ("midpoint", "bdf2", "discrete-gradient")
 
 
@@ -243,9 +242,8 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
     program = {"midpoint": _program, "bdf2": _program_bdf}.get(scheme)
     if program is None:
         from jaxrod.dynamics.discrete_gradient import run_discrete_gradient as program
-    out = jax.device_get(program(scene, disc, q0, p0, float(dt), steps, c, vary, start,
-                                 float(rate), loop_length(steps)))
-    q, kin, pot, angle, tangent, X, conv, res = (np.asarray(o)[:steps] for o in out)
+    q, kin, pot, angle, tangent, X, conv, res = jax.device_get(program(
+        scene, disc, q0, p0, float(dt), steps, c, vary, start, float(rate)))
     return Trajectory(time=dt * np.arange(1, steps + 1), states=np.asarray(q),
                       tip_angle_deg=np.degrees(angle), tip_tangent_deg=np.degrees(tangent),
                       tip_position=np.asarray(X), kinetic=np.asarray(kin),

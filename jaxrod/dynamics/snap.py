@@ -164,8 +164,7 @@ def duration_of(scene: Scene, fold: Fold, damping, t_end: float = 60.0, dt: floa
     x, value = z[:m], fold.value + z[-1]
     at = scene.replace(fold.vary, value + side * past)
     start = jnp.degrees(tip(scene.replace(fold.vary, value), x, disc)[0])
-    out = _run_bdf(at, disc, x, jnp.zeros(m), dt, steps, (damping, None), None, 0.0, 0.0,
-                   steps)  # every step's output is used: no padding
+    out = _run_bdf(at, disc, x, jnp.zeros(m), dt, steps, (damping, None), None, 0.0, 0.0)
     angle, converged = jnp.degrees(out[3]), out[-2]
     time = dt * jnp.arange(0, steps + 1)
     angle = jnp.concatenate([start[None], angle])
