@@ -1,6 +1,5 @@
-"""How jaxrod's programs are compiled: ``jit``, which is ``jax.jit`` with XLA options, the
-batch sizes batched programs are compiled for (``bucket``, ``padded``) and the lengths that
-time-stepping loops are compiled for (``loop_length``, ``scan_first``).
+"""How jaxrod's programs are compiled: ``jit``, which is ``jax.jit`` with XLA options, and the
+batch sizes batched programs are compiled for (``bucket``, ``padded``).
 
 jaxrod's solvers are small dense linear algebra inside nested ``lax.while_loop``s, and on a
 CPU most of a first call is XLA's code generation for a few hundred small fused kernels.
@@ -27,7 +26,6 @@ import inspect
 from collections.abc import Callable
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 #: XLA options for jaxrod's programs (module docstring).
@@ -225,26 +223,3 @@ def padded(arrays, size: int | None = None, multiple: int = 1):
         return list(arrays)
     return [np.concatenate([a, np.repeat(a[:1], size - k)]) for a in arrays]
 
-
-# --- loop lengths: one program per doubling of a step count, not per step count ----------
-
-def loop_length(steps: int) -> int:
-    """The compiled length of a loop of ``steps`` steps: the next power of two, at least 8
-    (``scan_first``): a time step halved in a convergence study, or a longer run, reuses the
-    program of the step counts of its doubling instead of compiling one for each count."""
-    return max(8, 1 << (int(steps) - 1).bit_length())
-
-
-def scan_first(step, carry, steps, length: int):
-    """``jax.lax.scan(step, carry, jnp.arange(length))`` that takes only its first ``steps``
-    steps (``steps`` traced, at most ``length``): each later step keeps the carry and gives
-    zeros (a ``lax.cond``, so it costs nothing where the loop is not under ``vmap``; under
-    ``vmap`` both branches run). Returns (the carry after ``steps`` steps, the outputs of
-    all ``length`` steps: keep the first ``steps``)."""
-    shapes = jax.eval_shape(step, carry, jnp.asarray(0))[1]
-
-    def hold(c, k):
-        return c, jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
-
-    return jax.lax.scan(lambda c, k: jax.lax.cond(k < steps, step, hold, c, k), carry,
-                        jnp.arange(length))
