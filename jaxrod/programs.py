@@ -149,8 +149,9 @@ class Program:
                 elif self._defaults.get(name, _EMPTY) is not _EMPTY:
                     missing.append(self._defaults[name])
                 else:
-                    break  # a required argument left out: jax says so
-            return tuple(out), {}
+                    break  # a required argument left out: inspect says so
+            else:
+                return tuple(out), {}
         bound = self._signature.bind(*args, **kwargs)
         for name, default in self._static_defaults.items():
             bound.arguments.setdefault(name, default)
@@ -222,4 +223,3 @@ def padded(arrays, size: int | None = None, multiple: int = 1):
     if size == k:
         return list(arrays)
     return [np.concatenate([a, np.repeat(a[:1], size - k)]) for a in arrays]
-

@@ -1,6 +1,7 @@
 """How programs are compiled (``jaxrod.programs``): one program per call form."""
 
 import numpy as np
+import pytest
 
 from jaxrod.programs import jit
 
@@ -24,3 +25,13 @@ def test_one_program_whatever_the_call_form():
     assert all(np.array_equal(a, 3.0 * x) for a in answers)
     f(x, 4)
     assert traces == [3, 3, 4]
+
+
+def test_a_wrong_call_is_reported_as_python_reports_it():
+    @jit(static_argnames=("n",))
+    def g(x, n, scale=1.0):
+        return x * n * scale
+
+    for call in (lambda: g(1.0, scale=2.0), lambda: g(1.0, 2, n=2), lambda: g(1.0, 2, k=1)):
+        with pytest.raises(TypeError):
+            call()
