@@ -110,6 +110,7 @@ class Program:
             p.kind is inspect.Parameter.POSITIONAL_OR_KEYWORD
             for p in self._signature.parameters.values())
         self._plain = tuple(params) if plain else None
+        self._plain_names = frozenset(params) if plain else frozenset()
         defaults = {p.name: p.default for p in self._signature.parameters.values()} \
             if params is not None else {}
         self._defaults = defaults
@@ -136,8 +137,8 @@ class Program:
         plain = self._plain
         if not kwargs and plain is not None and len(args) == len(plain):
             return args, kwargs
-        if plain is not None and len(args) <= len(plain) and kwargs.keys() <= set(plain) \
-                and not kwargs.keys() & set(plain[:len(args)]):
+        if plain is not None and len(args) <= len(plain) and kwargs.keys() <= self._plain_names \
+                and not any(name in kwargs for name in plain[:len(args)]):
             out, missing = list(args), []
             for name in plain[len(args):]:
                 if name in kwargs:
