@@ -9,8 +9,13 @@ line search on the sufficient-decrease (Armijo) condition, in scaled coordinates
 
 from the first Jacobian J0 (columns of fixed entries zeroed), so the first direction is the
 Gauss-Newton step and u is in units of the Gauss-Newton standard deviations. Convergence:
-the gradient J^T r vanishes (|J^T r|_inf <= gtol), or no decrease is visible along a step
-of 1e-7 standard deviations (the loss is at its round-off floor).
+the gradient J^T r vanishes (|J^T r|_inf <= gtol), or its scaled form g_u = P^T J^T r (the
+Gauss-Newton step, in standard deviations) is below ``utol`` = 1e-10, or no decrease is
+visible along a step of 1e-7 standard deviations. Near the minimum the loss itself stops
+resolving the distance (a step of d standard deviations changes it by d^2 / 2, lost in its
+round-off ~1e3 eps |r|^2 once d ~ 1e-6 sqrt(|r|^2)): there a step that leaves the loss
+within its round-off is accepted when it lowers the gradient, so that the gradient, which
+is still resolved, brings the point to within ``utol`` of the minimiser.
 
 ``evaluate(p, aux) -> (r, J, aux_new, ok)`` gives the residuals and their Jacobian and may
 carry state ``aux`` from the last accepted point (fold states for a warm start); a trial
@@ -28,6 +33,10 @@ from typing import Any, NamedTuple
 import jax
 import jax.numpy as jnp
 import optax
+
+
+#: Round-off of the loss, in units of its value's eps: changes below it are not decreases.
+FLOOR_ULPS = 1024.0
 
 
 class LeastSquaresResult(NamedTuple):
@@ -89,7 +98,7 @@ def forward_mode(residuals: Callable) -> Callable:
 
 def least_squares_run(evaluate: Callable, p0, aux0, free, n_residuals: int,
                       start_ok=True, max_iter: int = 40,
-                      gtol: float = 1e-9) -> LeastSquaresResult:
+                      gtol: float = 1e-9, utol: float = 1e-10) -> LeastSquaresResult:
     """Minimise 0.5 |r|^2, (r, J, aux, ok) = evaluate(p, aux), over the ``free`` entries of
     p from p0 (module docstring). ``n_residuals`` is the length of r; ``start_ok`` False
     (the carried state could not be built) returns at once, not converged. jit/vmap
@@ -111,8 +120,12 @@ def least_squares_run(evaluate: Callable, p0, aux0, free, n_residuals: int,
         P = jnp.where(first, _inverse_sqrt(J.T @ J + fixed), s.P)
         grad_u = P.T @ (J.T @ r)
         armijo = value <= s.value + 1e-4 * s.t * jnp.dot(s.grad_u, s.direction)
-        # at the loss's round-off floor a decrease cannot be seen: a smaller gradient decides
-        at_floor = (jnp.abs(value - s.value) <= 64.0 * jnp.finfo(r.dtype).eps * s.value) \
+        # at the loss's round-off floor a decrease cannot be seen: where the Gauss-Newton
+        # decrease 0.5 |grad_u|^2 (unit Hessian in u) is below the loss's round-off and the
+        # loss did not change beyond it, a smaller gradient decides
+        floor = FLOOR_ULPS * jnp.finfo(r.dtype).eps * jnp.maximum(s.value, value)
+        at_floor = (jnp.abs(value - s.value) <= floor) \
+            & (0.5 * jnp.dot(s.grad_u, s.grad_u) <= floor) \
             & (jnp.max(jnp.abs(grad_u)) < jnp.max(jnp.abs(s.grad_u)))
         accept = good & (first | armijo | at_floor)
         update, opt_state = opt.update(grad_u, s.opt_state, u)
@@ -124,7 +137,8 @@ def least_squares_run(evaluate: Callable, p0, aux0, free, n_residuals: int,
             (s.u, s.aux, s.value, s.grad_u, s.r, s.J, s.ok, s.opt_state, s.direction))
         k = s.k + (accept & ~first)
         at_round_off = ~accept & ~first & good & (s.t * jnp.max(jnp.abs(s.direction)) <= 1e-7)
-        converged = (accept & (jnp.max(jnp.abs(J.T @ r)) <= gtol)) | at_round_off
+        converged = (accept & ((jnp.max(jnp.abs(J.T @ r)) <= gtol)
+                               | (jnp.max(jnp.abs(grad_u)) <= utol))) | at_round_off
         stalled = ~accept & (s.t < 1e-10)
         done = converged | stalled | (first & ~good) | (k >= max_iter) \
             | (s.evals + 1 >= 4 * max_iter)
