@@ -75,3 +75,19 @@ def pitchfork_coefficient(G, support):
     beta, u = eigenfunction(G, support)
     integrand = lambda s: (4.0 * (-beta) - G * (1.0 - s)) * u(s) ** 4
     return quad(integrand, 0.0, 1.0, epsabs=0, epsrel=1e-12, limit=200)[0] / 6.0
+
+
+def straight_rod_branch_loads(load, support, G_max, count):
+    """The first ``count`` gravity groups G in (0, G_max] at which the straight heavy rod
+    under a field along it (a stabilising load ``load``: -u'' - G (1 - s) u + load u = 0)
+    has a kernel: the zeros in G of the characteristic function at beta = -load, located
+    by a scan and polished by brentq."""
+    f = lambda G: characteristic(-load, G, support)
+    grid = np.linspace(0.5, G_max, 4000)  # the first kernel lies above G = 0.5 here
+    values = np.array([f(G) for G in grid])
+    roots = [brentq(f, a, b, xtol=1e-14, rtol=1e-15, maxiter=500)
+             for a, b, fa, fb in zip(grid[:-1], grid[1:], values[:-1], values[1:])
+             if np.sign(fa) != np.sign(fb)]
+    if len(roots) < count:
+        raise RuntimeError(f"found {len(roots)} branch loads below G = {G_max}")
+    return roots[:count]

@@ -1,14 +1,14 @@
 """Branch points: stability changes without a fold, refined by Moore's augmented system,
 and the branch that bifurcates there, against closed forms and shooting with scipy."""
 
+import contextlib
+import io
 import json
 import math
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from airy_reference import straight_rod_branch_loads
 from scipy.optimize import brentq
 from scipy.special import jv
 from test_scene_files import shooting_equilibria
@@ -66,14 +66,52 @@ def test_a_fold_is_not_a_branch_point():
     assert not jr.branch_points(scene, "field.angle", math.pi / 2, math.radians(359.0), n=16)
 
 
-def test_cli_branch_prints_the_branch_points():
-    proc = subprocess.run(
-        [sys.executable, "-m", "jaxrod.cli", "branch", "hard-magnetic-cantilever", "--vary",
-         "field.0.B", "--from", "0", "--to", "2e-3", "--set", "field.0.angle_deg=180",
-         "--json"], capture_output=True, text=True, timeout=600,
-        env={**os.environ, "JAXROD_NO_CACHE": "1"})
-    assert proc.returncode == 0, proc.stderr
-    out = json.loads(proc.stdout)
-    (bp,) = out["branch_points"]
-    assert abs(bp["value"] - math.pi**2 / 4 / 4000.0) <= 1e-13  # lambda = 4000 B
-    assert {"value", "tip_angle_deg"} <= set(bp) and out["folds"] == []
+#: Later branch points, each against an independent method: the opposed field's Euler loads
+#: (2k + 1)^2 pi^2 / 4 (the tip-loaded elastica, closed form), and the heavy rod held by a
+#: field along it, clamped and pinned, varied in G: the zeros in G of the Airy
+#: characteristic function of -u'' - G (1 - s) u + load u = 0 (tests/airy_reference.py).
+LATER_BRANCH_POINTS = [
+    ("opposed field", "clamped", "field.load", 0.0, 70.0, 0.0,
+     lambda: [(2 * k + 1) ** 2 * math.pi**2 / 4 for k in range(3)]),
+    ("heavy rod, field along it", "clamped", "gravity.G", 0.0, 200.0, 2.0,
+     lambda: straight_rod_branch_loads(2.0, "clamped", 200.0, 3)),
+    ("heavy rod, pinned base", "pinned", "gravity.G", 0.0, 150.0, 3.0,
+     lambda: straight_rod_branch_loads(3.0, "pinned", 150.0, 3)),
+]
+
+
+@pytest.mark.parametrize("name,support,vary,start,stop,load,reference", LATER_BRANCH_POINTS,
+                         ids=[row[0] for row in LATER_BRANCH_POINTS])
+def test_every_branch_point_along_a_range_is_its_own(name, support, vary, start, stop, load,
+                                                     reference):
+    """The first three branch points met along the range, each refined to the kernel of the
+    eigenvalue that crosses zero there (Morse index k -> k + 1), listed once, against the
+    independent value to 1e-9 (N = 24 resolves the third to 1e-12). The refinement used to
+    slide back to the first kernel from every later bracket: each later point was the first
+    one again, reported converged."""
+    if vary == "field.load":
+        scene = OPPOSED
+    else:
+        scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(0.0),
+                          "field": Zeeman(load, 0.0)}, support=support)
+    points = jr.branch_points(scene, vary, start, stop, n=24)
+    expected = reference()
+    assert [p.morse_index for p in points] == [(0, 1), (1, 2), (2, 3)]
+    assert np.all(np.abs(np.array([p.value for p in points]) - expected) <= 1e-9)
+    assert all(abs(p.unfolding) <= 1e-10 for p in points)
+
+
+def test_cli_branch_lists_the_branch_points_inside_its_range():
+    """jaxrod branch on the shipped hard-magnetic cantilever, opposed field from 3 to 6 mT:
+    the one branch point inside is the second Euler load, 9 pi^2 / 4 (lambda = 4000 B); the
+    first (0.617 mT) lies outside the range and is not listed."""
+    from jaxrod.cli import main
+
+    with contextlib.redirect_stdout(io.StringIO()) as out:
+        code = main(["branch", "hard-magnetic-cantilever", "--vary", "field.0.B", "--from",
+                     "3e-3", "--to", "6e-3", "--set", "field.0.angle_deg=180", "--json"])
+    assert code == 0
+    result = json.loads(out.getvalue())
+    (bp,) = result["branch_points"]
+    assert abs(bp["value"] - 9 * math.pi**2 / 4 / 4000.0) <= 1e-13
+    assert {"value", "tip_angle_deg"} <= set(bp) and result["folds"] == []

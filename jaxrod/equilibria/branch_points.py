@@ -70,43 +70,65 @@ def _bp_residual(z, args):
                                                               jnp.dot(phi, F_lam)])])
 
 
-def _refine_one(x0, lam0, scene, disc, origin, span, vary):
+def _refine_one(x_a, lam_a, x_b, lam_b, k, scene, disc, origin, span, vary):
+    """Moore's system from the bracket (a, b) of a Morse index change k -> k + 1 (or back):
+    the start is the secant zero of the k-th eigenvalue (ascending, the one that crosses)
+    between a and b, phi its eigenvector there, so that the refinement meets this crossing
+    and not the kernel of an earlier one (whose eigenvalue is negative here)."""
     model = Structured(Input(vary))
     margs = (scene, disc, origin, span)
-    phi0 = jnp.linalg.eigh(model.hessian(x0, lam0, margs))[1][:, 0]
+    mu_a = jnp.linalg.eigvalsh(model.hessian(x_a, lam_a, margs))[k]
+    mu_b = jnp.linalg.eigvalsh(model.hessian(x_b, lam_b, margs))[k]
+    t = jnp.clip(jnp.where(mu_a != mu_b, mu_a / (mu_a - mu_b), 0.5), 0.0, 1.0)
+    x0, lam0 = x_a + t * (x_b - x_a), lam_a + t * (lam_b - lam_a)
+    phi0 = jnp.linalg.eigh(model.hessian(x0, lam0, margs))[1][:, k]
     ell = phi0 / jnp.dot(phi0, phi0)
     z0 = jnp.concatenate([x0, phi0, jnp.stack([lam0, jnp.zeros_like(lam0)])])
     res = newton(_bp_residual, z0, (model, margs, ell), tol=1e-12)
     m = x0.shape[0]
     x, phi, lam = res.x[:m], res.x[m:2 * m], res.x[2 * m]
+    # the kernel found must be the k-th eigenvalue's: the others stay clear of zero
+    eig = jnp.linalg.eigvalsh(model.hessian(x, lam, margs))
+    others = jnp.where(jnp.arange(m) == k, jnp.inf, jnp.abs(eig))
+    own = jnp.abs(eig[k]) < jnp.min(others)
     scale = mean_functional(disc)(phi)
     phi = jnp.where(jnp.abs(scale) > 1e-8, phi / scale, phi)
     angle, X = tip(scene.replace(vary, origin + span * lam), x, disc)
-    return res, (x, phi, lam, res.x[2 * m + 1], angle, X)
+    return res, own, (x, phi, lam, res.x[2 * m + 1], angle, X)
 
 
-_refine = jit(jax.vmap(_refine_one, in_axes=(0, 0, None, None, None, None, None)),
+_refine = jit(jax.vmap(_refine_one, in_axes=(0, 0, 0, 0, 0, None, None, None, None, None)),
               static_argnames=("vary",))
 
 
 def refine_branch_points(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[BranchPoint]:
     """The branch points detected on ``b`` (``stability_changes``), refined in the order met
-    (module docstring); a change where the augmented system does not converge (a fold the
-    branch's sampling did not show as a turn) is reported with ``converged`` False."""
+    (module docstring). Each bracket (points i, i + 1 where the Morse index changes from k
+    to k' = k +- 1) is refined to the kernel of the eigenvalue that crosses there (the
+    min(k, k')-th, ascending), and counts as converged only if Moore's system converged,
+    that eigenvalue is the one nearest zero at the answer, and the answer lies in the
+    bracket (widened by its own width on each side): a refinement that slid to another
+    crossing is reported with ``converged`` False, never as a second copy of the first.
+    A change where the augmented system does not converge (a fold the branch's sampling did
+    not show as a turn) is reported with ``converged`` False."""
     idx = stability_changes(b)
     if len(idx) == 0:
         return []
     disc = discretise(scene, n)
     origin, span = float(b.value[0]), _span(b)
-    pick = np.where(np.abs(b.min_eig[idx]) <= np.abs(b.min_eig[idx + 1]), idx, idx + 1)
-    res, (x, phi, lam, mu, angle, X) = jax.device_get(_refine(
-        jnp.asarray(b.theta[pick]), jnp.asarray((b.value[pick] - origin) / span), scene,
-        disc, origin, span, b.vary))
+    k = np.minimum(b.morse_index[idx], b.morse_index[idx + 1]).astype(np.int32)
+    lam = (b.value - origin) / span
+    res, own, (x, phi, lam_star, mu, angle, X) = jax.device_get(_refine(
+        jnp.asarray(b.theta[idx]), jnp.asarray(lam[idx]), jnp.asarray(b.theta[idx + 1]),
+        jnp.asarray(lam[idx + 1]), jnp.asarray(k), scene, disc, origin, span, b.vary))
     points = []
     for i, j in enumerate(idx):
-        conv = bool(res.converged[i])
+        lo, hi = sorted((float(lam[j]), float(lam[j + 1])))
+        width = hi - lo
+        inside = lo - width <= float(lam_star[i]) <= hi + width
+        conv = bool(res.converged[i]) and bool(own[i]) and inside
         points.append(BranchPoint(
-            vary=b.vary, value=float(origin + span * lam[i]),
+            vary=b.vary, value=float(origin + span * lam_star[i]),
             tip_angle_deg=math.degrees(float(angle[i])), tip_position=np.asarray(X[i]),
             state=np.asarray(x[i]), null_vector=np.asarray(phi[i]), unfolding=float(mu[i]),
             morse_index=(int(b.morse_index[j]), int(b.morse_index[j + 1])), converged=conv,

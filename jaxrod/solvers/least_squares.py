@@ -34,7 +34,6 @@ import jax
 import jax.numpy as jnp
 import optax
 
-
 #: Round-off of the loss, in units of its value's eps: changes below it are not decreases.
 FLOOR_ULPS = 1024.0
 
