@@ -32,6 +32,8 @@ class Status(enum.IntEnum):
     SNAPPED_WHILE_LOADING = 9
     INVALID_INPUT = 10
     NOT_CONVERGED = 11
+    MAGNET_IN_REACH = 12
+    UNDER_RESOLVED = 13
 
     @property
     def ok(self) -> bool:
@@ -78,6 +80,11 @@ MESSAGES = {
     Status.INVALID_INPUT: "an input is outside its valid range",
     Status.NOT_CONVERGED: "the solver did not converge (see the residual and iterations); "
     "try a larger N, or a start closer to the solution",
+    Status.MAGNET_IN_REACH: "stopped where the path brings a magnet within the rod's reach "
+    "(closer to the clamp than the rod's length, where the energy is singular): the part "
+    "before it is kept; shorten the range or move the path away",
+    Status.UNDER_RESOLVED: "converged, but the discretisation does not resolve the answer "
+    "(its a posteriori error estimate is above round-off): raise N",
 }
 
 

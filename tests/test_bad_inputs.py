@@ -133,12 +133,27 @@ TABLE = [
     (["design", "--capture", "40", "--release", "30", "--vary", "track-radius"], "release"),
     (["design", "--capture", "20", "--release", "95", "--vary", "track-radius"], "release"),
     (["design", "--capture", "20", "--release", "45", "--vary", "K"], "vary"),
+    # sign slips in a scene file: refused, never the mirror image's answer
+    (["equilibrium", "hard-magnetic-cantilever", "--set", "rod.youngs_modulus=-1.0e6"],
+     "rod.youngs_modulus"),
+    (["equilibrium", "hard-magnetic-cantilever", "--set", "rod.radius=-0.5e-3"], "rod.radius"),
+    (["equilibrium", "hard-magnetic-cantilever", "--set", "rod.length=-0.05"], "rod.length"),
+    (["equilibrium", "permanent-magnet", "--set", "field.0.diameter=-0.01"],
+     "field.0.diameter"),
+    # --set past the file's tables: a message, not a traceback
+    (["equilibrium", "hard-magnetic-cantilever", "--set", "field.3.B=1"], "field.3.B"),
+    # options that fail only after the work, checked first
+    (["snap", *PAPER, "--animate", "snap.avi"], "animate"),
+    (["snap", *PAPER, "--dt", "100"], "dt"),
+    (["branch", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg", "--from", "90",
+      "--to", "120", "--modes", "1000"], "modes"),
 ]
 
 
 @pytest.mark.parametrize("argv, name", TABLE, ids=[" ".join(a) for a, _ in TABLE])
 def test_table_of_bad_inputs(argv, name, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("PATH", str(tmp_path))  # no ffmpeg: an animation other than .gif
     line = refused(argv, capsys)
     assert name in line, line
 

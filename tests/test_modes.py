@@ -147,3 +147,24 @@ def test_cli_branch_of_a_scene_file_has_the_modes_as_rows(capsys):
     w2 = np.array(out["omega_squared"])
     assert w2.shape == (out["points"], 2) and len(out["folds"]) == 2
     assert np.array_equal(w2[:, 0] > 0, np.array(out["stable"]))
+
+
+def test_thirty_modes_are_right_or_not_printed(capsys):
+    """jaxrod modes --count 30 prints 30 modes, each the classical cantilever's to 1e-8
+    (it printed 24, modes 14-24 wrong, mode 24 by 23x): N is raised from 24 until the 30
+    agree with a coarser degree's; asked for more than the largest degree resolves, a
+    clear error; at a degree capped below what they need, UNDER_RESOLVED."""
+    from jaxrod.cli import main
+    from jaxrod.dynamics.modes import resolved_modes
+
+    assert main(["modes", "--G", "0", "--A", "0", "--count", "30", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["converged"] and out["status"] == "success" and out["resolved"] == 30
+    ref = np.array(cantilever_omegas(30))
+    assert len(out["omega"]) == 30
+    assert np.max(np.abs(np.array(out["omega"]) / ref - 1.0)) <= 1e-8
+    scene = jr.Scene({"bending": jr.Bending()})
+    capped = resolved_modes(scene, 14, n=8, n_max=32)
+    assert capped.status == jr.Status.UNDER_RESOLVED and capped.resolved < 14
+    with pytest.raises(jr.ParameterError, match="count"):
+        resolved_modes(scene, 200)

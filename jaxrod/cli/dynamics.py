@@ -40,18 +40,20 @@ def _scene(args):
 def cmd_modes(args) -> int:
     import numpy as np
 
-    from jaxrod.dynamics.modes import in_hertz, modes
+    from jaxrod.dynamics.modes import in_hertz, resolved_modes
 
     scene, file, inputs = _scene(args)
-    state = np.zeros(scene_size(scene, args.n)) if args.straight else None
-    m = modes(scene, state, n=args.n)
-    out = {"inputs": inputs, "n": args.n, **m.as_dict(args.count),
-           "units": "omega in 1 / (L^2 sqrt(rho A_c / (E I)))"}
     for name in ("damping", "kelvin_voigt"):
         v = getattr(args, name)
         if not (math.isfinite(v) and v >= 0):
             raise ParameterError(f"{name.replace('_', '-')} must be a finite number >= 0, got "
                                  f"{v!r}")
+    r = resolved_modes(scene, args.count, n=args.n, straight=args.straight)
+    m = r.modes
+    out = {"inputs": inputs, "n": r.n, **m.as_dict(args.count),
+           "resolved": r.resolved, "error_estimate": r.error_estimate.tolist(),
+           "converged": r.converged, "status": r.status.name.lower(),
+           "units": "omega in 1 / (L^2 sqrt(rho A_c / (E I)))"}
     if args.damping or args.kelvin_voigt:
         out["damping_ratio"] = [None if not math.isfinite(z) else float(z) for z in
                                 m.damping_ratios(args.damping, args.kelvin_voigt)[:args.count]]
@@ -63,7 +65,7 @@ def cmd_modes(args) -> int:
     if args.plot:
         from jaxrod.dynamics.figures import modes_figure
 
-        modes_figure(scene, m, n=args.n, count=min(args.count, 4)).savefig(args.plot, dpi=150)
+        modes_figure(scene, m, n=r.n, count=min(args.count, 4)).savefig(args.plot, dpi=150)
     if args.json:
         print(json.dumps(out))
     else:
@@ -73,13 +75,11 @@ def cmd_modes(args) -> int:
             extra += f"  damping ratio {zeta[k]:.4g}" if zeta and zeta[k] is not None else ""
             print(f"mode {k + 1}: omega = {w if w is None else f'{w:.10g}'}{extra}")
         print("stable" if m.stable else "UNSTABLE: omega^2 < 0 (NaN omega)")
-    return 0
-
-
-def scene_size(scene, n: int) -> int:
-    from jaxrod.equilibria.equilibrium import discretise
-
-    return discretise(scene, n).size
+        print(f"N = {r.n}: " + (f"the {r.count} modes agree with the previous degree's to "
+                                f"{max(r.error_estimate):.1e}" if r.converged else
+                                f"UNDER-RESOLVED: only the lowest {r.resolved} of {r.count} "
+                                "agree with the previous degree's"))
+    return 0 if r.converged else 1
 
 
 def add_modes(sub) -> None:
@@ -94,7 +94,9 @@ def add_modes(sub) -> None:
     mo.add_argument("--straight", action="store_true",
                     help="about the straight rod (default: the ramped equilibrium)")
     mo.add_argument("--count", type=int, default=6, help="how many modes (default 6)")
-    mo.add_argument("--n", type=_degree("N"), default=24, help="Chebyshev degree (default 24)")
+    mo.add_argument("--n", type=_degree("N"), default=24,
+                    help="the first Chebyshev degree (default 24), raised until the modes "
+                    "asked for agree with a coarser degree's to 1e-9")
     mo.add_argument("--damping", type=_float("damping"), default=0.0,
                     help="linear drag per unit length: print the damping ratios")
     mo.add_argument("--kelvin-voigt", type=_float("kelvin-voigt"), default=0.0,

@@ -12,6 +12,7 @@ import numpy as np
 
 from jaxrod.cli._inputs import _degree, _float
 from jaxrod.params import ParameterError
+from jaxrod.status import Status
 
 
 def add_scene_file_inputs(p, vary: bool, to: bool = True, vary_name: str = "--vary") -> None:
@@ -101,12 +102,19 @@ def branch_on_file(args) -> int:
 
     import jaxrod as jr
 
+    if getattr(args, "modes", 0):
+        from jaxrod.dynamics.modes import resolvable
+
+        if not 0 <= args.modes <= resolvable(args.n):
+            raise ParameterError(f"modes: degree {args.n} resolves the lowest 0 to "
+                                 f"{resolvable(args.n)} modes (raise --n for more), got "
+                                 f"{args.modes}")
     file = _load(args)
     key, start, stop, factor = _range(args, file)
     from jaxrod.equilibria.branch_points import refine_branch_points
     from jaxrod.equilibria.folds import refine
 
-    b = jr.branch(file.scene, key, start, stop, n=args.n)
+    b = jr.branch(file.scene, key, start, stop, n=args.n, margins=file.margins)
     folds = refine(file.scene, b, n=args.n)
     points = refine_branch_points(file.scene, b, n=args.n)
     values = np.asarray(b.value) / factor
@@ -118,8 +126,7 @@ def branch_on_file(args) -> int:
                               **_at(p.tip_angle_deg, p.tip_position, file),
                               "morse_index": list(p.morse_index), "converged": p.converged,
                               "residual_norm": p.residual_norm} for p in points],
-           "status": [s.name.lower() for s in b.status], "complete": b.complete,
-           "converged": all(f.converged for f in folds) and all(p.converged for p in points)}
+           **_path_status(b, folds + points, factor)}
     w2 = None
     if getattr(args, "modes", 0):  # the vibration modes as rows of the branch
         from jaxrod.dynamics.modes import modes_along
@@ -145,8 +152,26 @@ def branch_on_file(args) -> int:
         for kind, items in (("fold", out["folds"]), ("branch point", out["branch_points"])):
             for f in items:
                 print(f"  {kind} at {args.vary} = {f['value']:.10g} (tip angle "
-                      f"{f['tip_angle_deg']:.6f} deg)")
+                      f"{f['tip_angle_deg']:.6f} deg)"
+                      + ("" if f["converged"] else "  NOT CONVERGED"))
+        if not out["converged"]:
+            print(f"  {out['status']} (the branch ended at {args.vary} = "
+                  f"{out['last_value']:.10g}): {out['message']}")
     return 0 if out["converged"] else 1
+
+
+def _path_status(b, points, factor) -> dict:
+    """What a branch and its refined points say, as the commands print it: ``converged``
+    (the branch reached the end of its range and every point converged), ``status`` (why
+    not: the branch's first failing status, else ``not_converged`` for a point), the
+    branch's statuses, ``complete`` and ``last_value`` (where it ended)."""
+    failed = [s for s in b.status if not s.ok]
+    status = failed[0] if failed else (Status.SUCCESS if all(p.converged for p in points)
+                                       else Status.NOT_CONVERGED)
+    return {"converged": status == Status.SUCCESS and b.complete,
+            "status": status.name.lower(), "message": status.message,
+            "branch_status": [s.name.lower() for s in b.status], "complete": b.complete,
+            "last_value": float(b.value[-1]) / factor}
 
 
 def _fold(f, factor, file) -> dict:
@@ -159,12 +184,14 @@ def folds_on_file(args) -> int:
     """``jaxrod folds RIG --vary KEY --from A --to B``: the folds met along the path, in
     order."""
     import jaxrod as jr
+    from jaxrod.equilibria.folds import refine
 
     file = _load(args)
     key, start, stop, factor = _range(args, file)
-    folds = jr.scene_folds(file.scene, key, start, stop, n=args.n, throw=False)
+    b = jr.branch(file.scene, key, start, stop, n=args.n, margins=file.margins)
+    folds = refine(file.scene, b, n=args.n)
     out = {"vary": args.vary, "folds": [_fold(f, factor, file) for f in folds],
-           "converged": all(f.converged for f in folds), "n": args.n}
+           **_path_status(b, folds, factor), "n": args.n}
     if args.json:
         print(json.dumps(out))
     else:
@@ -172,7 +199,11 @@ def folds_on_file(args) -> int:
               f"{args.stop:g}")
         for f in out["folds"]:
             print(f"  fold at {args.vary} = {f['value']:.10f} (tip angle "
-                  f"{f['tip_angle_deg']:.10f} deg)")
+                  f"{f['tip_angle_deg']:.10f} deg)"
+                  + ("" if f["converged"] else "  NOT CONVERGED"))
+        if not out["converged"]:
+            print(f"  {out['status']} (the branch ended at {args.vary} = "
+                  f"{out['last_value']:.10g}): {out['message']}")
     return 0 if out["converged"] else 1
 
 

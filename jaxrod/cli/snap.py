@@ -16,6 +16,7 @@ def cmd_snap(args) -> int:
     import jaxrod as jr
     from jaxrod.dynamics.snap import snap
 
+    _check_before_work(args)
     physical = _physical_snap(args)
     for name in ("damping", "kelvin_voigt"):
         v = getattr(args, name)
@@ -67,6 +68,26 @@ def cmd_snap(args) -> int:
               f"{fold.tip_angle_deg:.4f} -> {s.rest_tip_deg:.4f} deg, peak tip speed "
               f"{s.peak_tip_speed:.4g} deg per unit time, overshoot {s.overshoot_deg:.4g} deg")
     return 0 if s.trajectory.converged else 1
+
+
+def _check_before_work(args) -> None:
+    """The options that would fail only after the simulation, checked first: the time step
+    against the simulated time, and the animation's writer (.gif: Pillow; anything else:
+    ffmpeg, which must be on the PATH)."""
+    for name in ("t_end", "dt"):
+        v = getattr(args, name)
+        if not (math.isfinite(v) and v > 0):
+            raise ParameterError(f"{name.replace('_', '-')} must be a finite number > 0, got "
+                                 f"{v!r}")
+    if args.dt > args.t_end / 10:
+        raise ParameterError(f"dt: {args.dt:g} leaves fewer than 10 steps in --t-end "
+                             f"{args.t_end:g} (a snap lasts ~1-10 time units; try 0.01)")
+    if args.animate:
+        import shutil
+
+        if not str(args.animate).endswith(".gif") and shutil.which("ffmpeg") is None:
+            raise ParameterError(f"animate: {args.animate} needs ffmpeg on the PATH (not "
+                                 "found); write a .gif instead (Pillow)")
 
 
 def _physical_snap(args):

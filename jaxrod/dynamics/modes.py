@@ -30,6 +30,7 @@ from jaxrod.equilibria.equilibrium import DEFAULT_N, FIXED, discretise, equilibr
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.scene import Scene
+from jaxrod.status import Status
 
 
 def positions(scene: Scene, x, disc):
@@ -115,6 +116,60 @@ def modes(scene: Scene, state=None, n: int = DEFAULT_N) -> Modes:
     return Modes(np.asarray(lam), np.asarray(V), np.asarray(x), np.asarray(kv))
 
 
+def resolvable(n: int) -> int:
+    """How many of the lowest modes degree n resolves (n / 2 - 2: the classical cantilever's
+    first n / 2 - 2 are right to 1e-8 at n = 32-96, the next ones are not)."""
+    return max(n // 2 - 2, 1)
+
+
+@dataclasses.dataclass(frozen=True)
+class ResolvedModes:
+    """``modes`` at the degree ``n`` that resolves the lowest ``count`` of them (or the
+    largest tried), with ``error_estimate``: |omega_k^2(n) - omega_k^2(n')| / max(|omega_k^2|,
+    1) against the coarser degree n' tried before (an upper bound on the error at n, the
+    Chebyshev discretisation converging spectrally), ``resolved``: how many of the lowest
+    agree to ``tol``, and ``status``: SUCCESS, or UNDER_RESOLVED when fewer than ``count``."""
+
+    modes: Modes
+    n: int
+    count: int
+    resolved: int
+    error_estimate: np.ndarray
+    status: Status
+
+    @property
+    def converged(self) -> bool:
+        return self.status == Status.SUCCESS
+
+
+def resolved_modes(scene: Scene, count: int, n: int = DEFAULT_N, straight: bool = False,
+                   tol: float = 1e-9, n_max: int = 256) -> ResolvedModes:
+    """The lowest ``count`` modes about the scene's equilibrium (the straight rod with
+    ``straight``), N raised from ``n`` (at least to resolve ``count``: ``resolvable``) until
+    they agree with those of the previous degree to ``tol`` relative, each degree ~1.3x the
+    last, at most ``n_max``: an answer at round-off or a status that says it is not."""
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
+        raise ParameterError(f"count must be a whole number >= 1, got {count!r}")
+    if count > resolvable(n_max):
+        raise ParameterError(f"count: at most {resolvable(n_max)} modes are resolved (degree "
+                             f"{n_max}), got {count}")
+    n = min(max(n, 2 * count + 4), n_max - 8)  # at least one finer degree to compare
+    coarse, error, resolved = None, np.full(count, np.nan), 0
+    while True:
+        state = np.zeros(discretise(scene, n).size) if straight else None
+        m = modes(scene, state, n=n)
+        w2 = np.full(count, np.nan)
+        w2[:min(count, len(m.omega_squared))] = m.omega_squared[:count]
+        if coarse is not None:
+            error = np.abs(w2 - coarse) / np.maximum(np.abs(w2), 1.0)
+            bad = np.nonzero(~(error <= tol))[0]
+            resolved = int(bad[0]) if len(bad) else count
+        if resolved == count or n >= n_max:
+            status = Status.SUCCESS if resolved == count else Status.UNDER_RESOLVED
+            return ResolvedModes(m, n, count, resolved, error, status)
+        coarse, n = w2, min(n_max, n + max(8, n // 3))
+
+
 @jit(static_argnames=("vary", "count"))
 def _along(scene, disc, states, values, vary, count):
     return jax.vmap(lambda x, v: _modes(scene.replace(vary, v), disc, x)[0][:count])(
@@ -128,6 +183,10 @@ def modes_along(scene: Scene, branch, n: int = DEFAULT_N, count: int = 3) -> np.
     disc = discretise(scene, n)
     if branch.theta.shape[1] != disc.size:
         raise ParameterError(f"the branch's states are not of degree {n}")
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) \
+            or not 1 <= count <= resolvable(n):
+        raise ParameterError(f"modes: degree {n} resolves the lowest 1 to {resolvable(n)} "
+                             f"modes (raise N for more), got {count!r}")
     return np.asarray(_along(scene, disc, jnp.asarray(branch.theta),
                              jnp.asarray(branch.value), branch.vary, count))
 

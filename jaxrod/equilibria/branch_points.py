@@ -138,7 +138,8 @@ def refine_branch_points(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Br
 
 
 def branch_points(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
-                  state=None, throw: bool = True) -> list[BranchPoint]:
+                  state=None, throw: bool = True, margins: dict | None = None
+                  ) -> list[BranchPoint]:
     """The branch points met along the branch of ``scene`` as ``vary`` goes from ``start``
     to ``stop`` (in the order met), each refined by Moore's augmented system (module
     docstring).
@@ -146,8 +147,8 @@ def branch_points(scene: Scene, vary: str, start: float, stop: float, n: int = D
     ``throw``: raise ``SolverError`` if a refinement does not converge.
     """
     start, stop = check_range(scene, vary, start, stop)
-    return checked(refine_branch_points(scene, branch(scene, vary, start, stop, n, state), n),
-                   "branch point", throw)
+    b = branch(scene, vary, start, stop, n, state, margins=margins)
+    return checked(refine_branch_points(scene, b, n), "branch point", throw)
 
 
 def _switch_residual(y, args):

@@ -124,7 +124,9 @@ class Equilibrium:
     ``tip_angle_deg``: the direction of the tip position X = int_0^1 d3 ds (rod lengths,
     ``tip_position``) from +z toward +x (the paper's tip angle); ``tip_tangent_deg``: the
     tangent's angle at the tip from +z toward +x (the tip's rotation); ``stable``: the
-    Hessian's smallest eigenvalue is positive.
+    Hessian's smallest eigenvalue is positive; ``converged``: the final Newton solve
+    converged and ``status`` is a success (a ramp that stopped short of full load is not
+    converged, whatever Newton did from where it stopped).
     """
 
     state: np.ndarray
@@ -206,5 +208,6 @@ def equilibrium(scene: Scene, n: int = DEFAULT_N, state=None, throw: bool = True
                        tip_position=np.asarray(X), tip_tangent_deg=math.degrees(float(tangent)),
                        energy=float(energy),
                        smallest_eigenvalue=float(eig), stable=bool(eig > 0),
-                       converged=bool(conv), residual_norm=float(res), iterations=int(it),
+                       converged=bool(conv) and code.ok, residual_norm=float(res),
+                       iterations=int(it),
                        status=code)

@@ -28,7 +28,7 @@ from jaxrod.equilibria.record import Branch, SpecialPoint, checked
 from jaxrod.programs import jit
 from jaxrod.scenes.scene import Input, Scene
 from jaxrod.solvers.folds import fold_coefficients, moore_spence_solve
-from jaxrod.status import Status
+from jaxrod.status import SolverError, Status
 
 
 @dataclasses.dataclass(frozen=True)
@@ -73,12 +73,16 @@ def refine(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Fold]:
     lam0 = (b.value[pick] - origin) / span
     fp, rep = jax.device_get(_refine(jnp.asarray(b.theta[pick]), jnp.asarray(lam0), scene,
                                      disc, origin, span, b.vary))
+    # a refinement that left the branch's range (by a tenth of it) found another fold, or
+    # none: not converged
+    lo, hi = float(np.nanmin(b.value)), float(np.nanmax(b.value))
     folds = []
     for i in range(len(pick)):
         d_v, d_qq, q, angle, X, phi = (np.asarray(r[i]) for r in rep)
-        conv = bool(fp.newton.converged[i])
+        value = float(origin + span * fp.lam[i])
+        conv = bool(fp.newton.converged[i]) and lo - 0.1 * span <= value <= hi + 0.1 * span
         folds.append(Fold(
-            vary=b.vary, value=float(origin + span * fp.lam[i]),
+            vary=b.vary, value=value,
             tip_angle_deg=math.degrees(float(angle)), tip_position=X, q=float(q),
             dF_dvalue=float(d_v), d2F_dq2=float(d_qq), normal_form_c=float(-d_qq / (2 * d_v)),
             state=np.asarray(fp.x[i]), null_vector=phi, converged=conv,
@@ -95,11 +99,18 @@ def _span(b: Branch) -> float:
 
 
 def folds(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
-          state=None, throw: bool = True) -> list[Fold]:
+          state=None, throw: bool = True, margins: dict | None = None) -> list[Fold]:
     """The folds met along the branch of ``scene`` as ``vary`` goes from ``start`` to
     ``stop`` (in the order met), each refined by Moore-Spence with its normal form.
 
-    ``throw``: raise ``SolverError`` if a fold's refinement does not converge.
+    ``throw``: raise ``SolverError`` if a fold's refinement does not converge, or if the
+    branch ended before ``stop`` (folds beyond would be missing: ``Branch.status`` says
+    why; ``jaxrod.equilibria.branch`` and ``refine`` give the branch and its folds).
+    ``margins``: the magnets' radii by term name (``jaxrod.equilibria.branch.reach_along``).
     """
     start, stop = check_range(scene, vary, start, stop)
-    return checked(refine(scene, branch(scene, vary, start, stop, n, state), n), "fold", throw)
+    b = branch(scene, vary, start, stop, n, state, margins=margins)
+    if throw and not b.complete:
+        raise SolverError(next((s for s in b.status if not s.ok), Status.NOT_CONVERGED),
+                          f"the branch along {vary} ended at {b.value[-1]:.6g}")
+    return checked(refine(scene, b, n), "fold", throw)

@@ -114,6 +114,13 @@ class Branch:
         return ax
 
 
+def first_points(b: Branch, k: int) -> Branch:
+    """The branch's first ``k`` points (every per-point field cut; the statuses kept)."""
+    per_point = {f.name: getattr(b, f.name)[:k] for f in dataclasses.fields(b)
+                 if isinstance(getattr(b, f.name), np.ndarray)}
+    return dataclasses.replace(b, **per_point)
+
+
 def branch_from_runs(runs: list[tuple[RawBranch, bool, tuple]]) -> Branch:
     """Concatenate continuation runs (each optionally reversed) into one ``Branch``.
 

@@ -103,13 +103,28 @@ def _number(data: dict, key: str, where: str, required: bool = True, default=Non
     return float(v)
 
 
+#: SI entries that are sizes or magnitudes: a negative value is a sign slip, never a mirror
+#: image (a negative E, radius or magnet diameter would give the answer of its opposite).
+#: A sign is meaningful for B (a reversed field), g (a hanging rod: negative g) and the rod's
+#: remanence (a magnetisation against the tangent); a magnet's moment takes its direction
+#: from ``moment_direction``.
+POSITIVE = ("length", "radius", "youngs_modulus", "density", "diameter", "saturation",
+            "moment")
+
+
 def _plausible(table: dict, where: str) -> None:
-    """An SI file's numbers within ``SI_LIMITS`` (a 30 T field, a 3 km rod: a unit slip);
-    entries that are not finite numbers are left to ``_number``."""
+    """An SI file's numbers within ``SI_LIMITS`` (a 30 T field, a 3 km rod: a unit slip),
+    sizes and magnitudes (``POSITIVE``, and a magnet's remanence) not negative; entries
+    that are not finite numbers are left to ``_number``."""
     for key, v in table.items():
         lo_hi = SI_LIMITS.get(key)
         if lo_hi is None or isinstance(v, bool) or not isinstance(v, (int, float)) \
-                or not math.isfinite(v) or lo_hi[0] <= abs(v) <= lo_hi[1]:
+                or not math.isfinite(v):
+            continue
+        sized = key in POSITIVE or (key == "remanence" and where.startswith("field"))
+        if sized and v <= 0.0 and not (v == 0.0 and key in ("saturation", "moment")):
+            _fail(f"{where}{key}", f"must be > 0 {lo_hi[2]} (a size or magnitude), got {v:g}")
+        if lo_hi[0] <= abs(v) <= lo_hi[1]:
             continue
         _fail(f"{where}{key}", f"{v:g} {lo_hi[2]} is outside the plausible {lo_hi[0]:g} to "
                                f"{lo_hi[1]:g} {lo_hi[2]}: a unit slip? (SI units; or set "
@@ -131,12 +146,14 @@ def _vector(data: dict, key: str, where: str, default):
 class FileScene:
     """A scene read from a file: the ``Scene``, the file keys that are scalar inputs
     (``inputs``: file key -> (scene key, factor), scene value = factor * file value), the
-    rod's length in the file's unit (1 when nondimensional) and the parsed file."""
+    rod's length in the file's unit (1 when nondimensional), the parsed file, and the
+    magnets' radii in rod lengths by term name (``margins``: the clearance a path keeps)."""
 
     scene: Scene
     inputs: dict
     length: float
     data: dict
+    margins: dict = dataclasses.field(default_factory=dict)
 
     def input_of(self, key: str, what: str = "vary") -> tuple[str, float]:
         """(scene key, factor) of the file key ``key``; ParameterError (naming the option
@@ -195,7 +212,11 @@ def apply_settings(data: dict, settings: list[str]) -> dict:
             value = text  # a bare word: a string
         node, parts = data, key.strip().split(".")
         for i, part in enumerate(parts[:-1]):
-            node = node[int(part)] if isinstance(node, list) and part.isdigit() \
+            if isinstance(node, list) and not (part.isdigit() and int(part) < len(node)):
+                raise ParameterError(f"set: {key!r} does not name an entry of the file ("
+                                     f"{'.'.join(parts[:i]) or 'it'} has {len(node)} "
+                                     f"entries, numbered from 0)")
+            node = node[int(part)] if isinstance(node, list) \
                 else node.setdefault(part, {}) if isinstance(node, dict) else None
             if node is None:
                 raise ParameterError(f"set: {key!r} does not name an entry of the file")
@@ -256,6 +277,7 @@ def scene_from(data: dict) -> FileScene:
     if support not in ("clamped", "pinned"):
         _fail("rod.support", f"must be \"clamped\" or \"pinned\", got {support!r}")
     inputs: dict[str, tuple[str, float]] = {}
+    margins: dict[str, float] = {}
     terms = {"bending": Bending()}
     if si:
         L = _number(rod, "length", "rod.")
@@ -332,7 +354,10 @@ def scene_from(data: dict) -> FileScene:
             m_key, m_factor = "M", 1.0
         if m_key is not None:
             inputs[f"{where}{m_key}"] = (f"{name}.M", m_factor)
-        half = 0.5 * field["diameter"] / L if si and "diameter" in field else 0.0
+        half = 0.5 * _number(field, "diameter", where) / L if si and "diameter" in field \
+            else 0.0
+        if half > 0.0:
+            margins[name] = half
         if field.get("path") == "circle":
             for key in ("position", "moment_direction", "rail", "along"):
                 if key in field:
@@ -384,7 +409,7 @@ def scene_from(data: dict) -> FileScene:
         terms[name] = PointDipole(M, c, np.array([u[0], 0.0, u[1]]), rail, along)
         inputs[f"{where}along"] = (f"{name}.along", 1.0 / L)
     scene = Scene(terms, geometry=geometry, support=support)
-    return FileScene(scene, inputs, L, data)
+    return FileScene(scene, inputs, L, data, margins)
 
 
 def _curve_dipole(field: dict, where: str, M, L, half):

@@ -20,6 +20,7 @@ energy: the ramp from the unloaded straight rod (``jaxrod.equilibria``) continue
 from __future__ import annotations
 
 import dataclasses
+import math
 from functools import lru_cache
 from typing import Any
 
@@ -210,6 +211,16 @@ class Scene:
         terms = dict(self.terms)
         terms[name] = dataclasses.replace(t, **{field: value})
         return dataclasses.replace(self, terms=terms)
+
+    def clearance(self, margins: dict | None = None) -> float:
+        """How far the nearest magnet's centre lies beyond the rod's reach, in rod lengths:
+        min over the terms with a ``centre()`` of |c| - 1 - margin (``margins``: term name ->
+        the magnet's radius, 0 by default); +inf without magnets. Negative: a magnet the
+        rod can touch, where the energy is singular. Host side (concrete inputs)."""
+        margins = margins or {}
+        gaps = [float(np.linalg.norm(np.asarray(t.centre()))) - 1.0 - margins.get(name, 0.0)
+                for name, t in self.terms.items() if hasattr(t, "centre")]
+        return min(gaps, default=math.inf)
 
     def check_key(self, key: str) -> str:
         """``key`` if it names a scalar input, else a ``SceneError`` naming it."""

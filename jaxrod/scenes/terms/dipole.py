@@ -34,6 +34,10 @@ class Dipole:
     alpha: jax.Array | float = 0.0
     beta: jax.Array | float = 0.0
 
+    def centre(self):
+        """The magnet's centre D p (rod lengths from the clamp)."""
+        return self.D * unit_vector(self.alpha, self.beta)
+
     def endpoint(self, X):
         """M Phi(X)."""
         p = unit_vector(self.alpha, self.beta)

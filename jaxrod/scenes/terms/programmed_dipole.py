@@ -34,6 +34,10 @@ class ProgrammedDipole:
     moment: jax.Array = dataclasses.field(default_factory=lambda: jnp.array([0.0, 0.0, 1.0]))
     profile: jax.Array = dataclasses.field(default_factory=lambda: jnp.zeros(1))
 
+    def centre(self):
+        """The magnet's centre (rod lengths from the clamp)."""
+        return jnp.asarray(self.position)
+
     def distributed(self, r, d3, s, w):
         """-M sum_j w_j m_j . b(r_j - c)."""
         phi = jnp.polyval(jnp.asarray(self.profile)[::-1], s)
