@@ -14,7 +14,7 @@ import pytest
 
 import jaxrod as jr
 from jaxrod.bistability.fold_map import read_fold_map
-from jaxrod.scenes.terms import Bending, Dipole, Gravity
+from jaxrod.scenes.terms import Bending, Dipole, Gravity, Zeeman
 
 N = 10
 ALPHA = (0.0, math.pi / 2)
@@ -48,6 +48,25 @@ def test_the_map_is_what_scene_folds_gives_at_its_points(in_memory):
         folds = jr.scene_folds(scene, "magnet.alpha", *ALPHA, n=N)
         assert abs(in_memory.first[iy, ix] - folds[0].value) <= 1e-10
         assert abs(in_memory.second[iy, ix] - folds[1].value) <= 1e-10
+
+
+def test_a_point_whose_folds_converged_is_not_marked_failed():
+    """A hard-magnetic cantilever under gravity turned by its field (the folds in the
+    field's angle over load and G): the branches are long (the tip turns by up to 270
+    degrees), and points whose two folds converged were marked NOT_CONVERGED because the
+    branch ran out of points after them. Every point succeeds, its first fold that of
+    ``scene_folds`` there."""
+    scene = jr.Scene({"bending": Bending(), "gravity": Gravity(1.0),
+                      "field": Zeeman(5.0, math.pi / 2)})
+    loads, gs = np.array([6.3, 10.0]), np.array([1.0, 3.0])
+    angles = (math.pi / 2, math.radians(359.0))
+    m = jr.fold_map(scene, "field.angle", angles, ("field.load", loads), ("gravity.G", gs),
+                    n=N, progress=False, chunk=2)
+    assert np.all(m.status == int(jr.Status.SUCCESS)) and np.all(m.count >= 1)
+    for iy, ix in ((0, 0), (1, 1)):
+        at = scene.replace("field.load", loads[ix]).replace("gravity.G", gs[iy])
+        first = jr.scene_folds(at, "field.angle", *angles, n=N)[0]
+        assert abs(m.first[iy, ix] - first.value) <= 1e-10
 
 
 def test_the_store_is_the_map_and_a_killed_map_resumes(in_memory, tmp_path):

@@ -33,7 +33,9 @@ from jaxrod.solvers.continuation import REACHED_BOUND, ContinuationOptions, cont
 from jaxrod.solvers.folds import moore_spence_solve
 from jaxrod.status import Status
 
-CAPACITY = 160
+#: Points of a map point's branch: a hard-magnetic rod at load 10 turned by a field through
+#: 270 degrees needs ~700 steps of ds_max; its first two folds come within the first 320.
+CAPACITY = 320
 MAX_POINTS = 1_000_000
 OPTIONS = ContinuationOptions(ds=0.01, ds_min=1e-9, ds_max=0.05, lam_min=0.0, lam_max=1.0,
                               tol=1e-12, max_points=0)
@@ -45,7 +47,10 @@ class FoldMap:
 
     ``count``: folds met along the range (-1 where not computed); ``first``, ``second``: the
     first two folds' values of ``vary`` (NaN where fewer); ``status``: a ``Status`` code per
-    point (NOT_CONVERGED where the branch or a refinement failed).
+    point: SUCCESS where the first two folds converged (or the branch reached the range's
+    end with fewer), NOT_CONVERGED where the ramp or a fold's refinement failed, the
+    branch's own status (CAPACITY_FULL, STEP_TOO_SMALL) where it ended before the range's
+    end with fewer than two folds (a later one may be missing).
     """
 
     vary: str
@@ -64,19 +69,28 @@ class FoldMap:
         """Two folds or more: a hysteresis loop in the range."""
         return self.count >= 2
 
-    def plot(self, ax=None):
-        """The number of folds per point (cells), failures hatched."""
+    def plot(self, ax=None, factor: float = 1.0, label: str | None = None):
+        """The first fold's value of ``vary`` per point (cells; divided by ``factor``, e.g.
+        to a scene file's unit; ``label`` names it on the colour bar), white where there is
+        none, failed points marked (x) and named in the legend."""
         import matplotlib.pyplot as plt
 
         ax = ax or plt.gca()
-        shown = np.ma.masked_where(self.status != int(Status.SUCCESS), self.count)
+        ok = self.status == int(Status.SUCCESS)
+        shown = np.ma.masked_where(~ok | np.isnan(self.first), self.first / factor)
         mesh = ax.pcolormesh(self.x_values, self.y_values, shown, shading="nearest",
-                             cmap="viridis", vmin=0, vmax=max(2, int(np.max(self.count))))
-        bad = self.status != int(Status.SUCCESS)
+                             cmap="viridis")
+        ax.figure.colorbar(mesh, ax=ax, label=label or f"the first fold's {self.vary}")
+        X, Y = np.meshgrid(self.x_values, self.y_values)
+        bad = (self.status != int(Status.SUCCESS)) & (self.status >= 0)
         if bad.any():
-            ax.contourf(self.x_values, self.y_values, bad.astype(float), levels=[0.5, 1.5],
-                        hatches=["xx"], colors="none")
-        ax.figure.colorbar(mesh, ax=ax, label=f"folds in {self.vary}")
+            ax.plot(X[bad], Y[bad], "rx", ms=5, ls="none",
+                    label=f"failed ({int(bad.sum())} of {bad.size}: see status)")
+        none = ok & (self.count == 0)
+        if none.any():
+            ax.plot(X[none], Y[none], ".", color="0.6", ms=3, ls="none", label="no fold")
+        if bad.any() or none.any():
+            ax.legend(fontsize=8, loc="best")
         ax.set_xlabel(self.x_key)
         ax.set_ylabel(self.y_key)
         return ax
@@ -105,8 +119,14 @@ def _point(xv, yv, scene, disc, origin, span, vary, x_key, y_key):
     values, conv = jax.vmap(refine)(order)
     have = jnp.arange(2) < count
     values = jnp.where(have, values, jnp.nan)
-    good = ok0 & (run.status == REACHED_BOUND) & jnp.all(conv | ~have)
-    status = jnp.where(good, int(Status.SUCCESS), int(Status.NOT_CONVERGED))
+    # a point's status is what its answer is: the first two folds, both converged, whatever
+    # the branch met after them; fewer than two, the branch must have reached the range's end
+    # (else its own status says why the rest is missing)
+    refined = jnp.all(conv | ~have)
+    status = jnp.where(
+        ~ok0 | ~refined, int(Status.NOT_CONVERGED),
+        jnp.where((count >= 2) | (run.status == REACHED_BOUND), int(Status.SUCCESS),
+                  run.status))
     return count, values[0], values[1], status
 
 
@@ -145,8 +165,8 @@ VARIABLES = {
     "count": Variable("<i2", "1", "folds met along the range; -1 not computed"),
     "first": Variable("<f8", "1", "the first fold's value of the varied input"),
     "second": Variable("<f8", "1", "the second fold's value of the varied input"),
-    "status": Variable("<i2", "1", "jaxrod.Status code: 0 success, 11 not converged; -1 not "
-                       "computed"),
+    "status": Variable("<i2", "1", "jaxrod.Status code: 0 success, 6 capacity full, 7 step "
+                       "too small, 11 not converged; -1 not computed"),
 }
 
 

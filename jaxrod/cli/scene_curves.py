@@ -106,7 +106,7 @@ def map_on_file(args) -> int:
         import matplotlib.pyplot as plt
 
         fig, ax = plt.subplots(figsize=(6, 4.5))
-        m.plot(ax)
+        m.plot(ax, factor=factor, label=f"the first fold's {args.vary}")
         ax.set_xlabel(xk)
         ax.set_ylabel(yk)
         fig.savefig(out_dir / "map.png", dpi=120)
