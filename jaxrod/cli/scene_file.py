@@ -79,21 +79,25 @@ def cmd_equilibrium(args) -> int:
 
     if not uses_scene_file(args):
         raise ParameterError("rig: name a scene file (jaxrod equilibrium RIG.toml)")
+    from jaxrod.equilibria.resolution import resolved_equilibrium
+
     file = _load(args)
-    eq = jr.equilibrium(file.scene, n=args.n, throw=False)
+    r = resolved_equilibrium(file.scene, n=args.n)
+    eq = r.equilibrium
     out = {"rig": args.rig, "set": args.set, **_at(eq.tip_angle_deg, eq.tip_position, file),
            "tip_tangent_deg": eq.tip_tangent_deg, "stable": eq.stable,
-           "converged": eq.converged, "status": eq.status.name.lower(),
-           "message": eq.message, "smallest_eigenvalue": eq.smallest_eigenvalue,
-           "residual_norm": eq.residual_norm, "n": args.n}
+           "converged": r.converged, "status": r.status.name.lower(),
+           "message": r.status.message, "smallest_eigenvalue": eq.smallest_eigenvalue,
+           "residual_norm": eq.residual_norm, "error_estimate": r.error_estimate, "n": r.n}
     if args.json:
         print(json.dumps(out))
     else:
         X = out["tip_position"]
         print(f"{args.rig}: tip angle {eq.tip_angle_deg:.10f} deg, tip tangent "
               f"{eq.tip_tangent_deg:.10f} deg, tip at ({X[0]:.6g}, {X[1]:.6g}, {X[2]:.6g}); "
-              f"{'stable' if eq.stable else 'UNSTABLE'}; {eq.message}")
-    return 0 if eq.converged else 1
+              f"{'stable' if eq.stable else 'UNSTABLE'}; {out['message']} (N = {r.n}, "
+              f"error estimate {r.error_estimate:.1e} rad)")
+    return 0 if r.converged else 1
 
 
 def branch_on_file(args) -> int:
@@ -211,7 +215,8 @@ def add_equilibrium(sub) -> None:
     e = sub.add_parser("equilibrium", help="the equilibrium of a rig given by a scene file")
     add_scene_file_inputs(e, vary=False)
     e.add_argument("--n", type=_degree("N-magnet"), default=16,
-                   help="Chebyshev degree, 4-64 (default 16)")
+                   help="the first Chebyshev degree, 4-64 (default 16), raised until the "
+                   "state's Chebyshev tail is below 1e-10 rad (else under_resolved)")
     e.add_argument("--json", action="store_true", help="print one JSON object")
     e.set_defaults(func=cmd_equilibrium)
 
