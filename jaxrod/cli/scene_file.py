@@ -75,7 +75,6 @@ def _at(eq_tip_deg, X, file) -> dict:
 
 
 def cmd_equilibrium(args) -> int:
-    import jaxrod as jr
 
     if not uses_scene_file(args):
         raise ParameterError("rig: name a scene file (jaxrod equilibrium RIG.toml)")
