@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 
 from jaxrod.cli._inputs import _float
 from jaxrod.cli.scene_file import add_scene_file_inputs
@@ -83,13 +84,30 @@ def sweep_on_file(args) -> int:
         raise ParameterError(f"to: must differ from --from ({a:g})")
     at = file.scene.replace(key, factor * a)
     start = jr.equilibrium(at, n=args.n or 16, throw=False)
+    out_dir = None
+    if args.out is not None:
+        from jaxrod.cli._output import _output_dir
+
+        out_dir = _output_dir(args.out)
     if args.rate is None:
+        from jaxrod.progress import Interrupted
+
         step = args.step or abs(b - a) / 200.0
         values = np.linspace(a, b, max(2, int(round(abs(b - a) / step)) + 1))
-        s = jr.scene_sweep(file.scene, key, (factor * values).tolist(), n=args.n or 16,
-                           state=start.state, progress=not args.quiet)
+        try:
+            s = jr.scene_sweep(file.scene, key, (factor * values).tolist(), n=args.n or 16,
+                               state=start.state, progress=not args.quiet)
+        except Interrupted as stop:
+            if out_dir is not None:
+                write_scene_sweep(out_dir, stop.partial, factor, args)
+            print(f"jaxrod sweep: {stop.partial.reason}" + (
+                f"; wrote what was computed to {out_dir / 'sweep.csv'} (marked incomplete)"
+                if out_dir is not None else ""), file=sys.stderr)
+            return 130
         switches = [snap["value"] / factor for snap in s.snaps]
         converged = s.converged
+        if out_dir is not None:
+            write_scene_sweep(out_dir, s, factor, args)
     else:
         if not (math.isfinite(args.rate) and args.rate > 0):
             raise ParameterError(f"rate must be a finite number > 0, got {args.rate!r}")
@@ -109,6 +127,43 @@ def sweep_on_file(args) -> int:
           + ": snapped at " + (", ".join(f"{v:.8g}" for v in switches) or "no value")
           + ("\n" + _describe(predicted, "") if args.rate is not None else ""))
     return 0 if converged else 1
+
+
+def write_scene_sweep(out_dir, s, factor, args) -> None:
+    """sweep.csv (the value in the file's units, the tip angle, the tip position in rod
+    lengths, snapped, converged; a first comment line when incomplete), sweep.json and
+    sweep.png (the tip angle against the value, the snaps marked) of a scene-file sweep."""
+    import numpy as np
+
+    v = s.values / factor
+    with open(out_dir / "sweep.csv", "w") as fh:
+        if not s.complete:
+            fh.write(f"# incomplete: {s.reason}\n")
+        fh.write(f"{args.vary},tip_angle_deg,tip_x,tip_z,snapped,converged\n")
+        for i in range(v.size):
+            fh.write(f"{v[i]:.12g},{s.tip_angle_deg[i]:.12g},{s.tip_position[i][0]:.12g},"
+                     f"{s.tip_position[i][2]:.12g},{int(s.snapped[i])},"
+                     f"{int(s.step_converged[i])}\n")
+    (out_dir / "sweep.json").write_text(json.dumps(
+        {"rig": args.rig, "set": args.set, "vary": args.vary, "complete": s.complete,
+         "reason": s.reason, "converged": s.converged, "points": int(v.size),
+         "snaps": [{**snap, "value": snap["value"] / factor} for snap in s.snaps]},
+        indent=1))
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    ax.plot(v, s.tip_angle_deg, "-", lw=1.2, label="followed")
+    snapped = np.asarray(s.snapped, bool)
+    if snapped.any():
+        ax.plot(v[snapped], s.tip_angle_deg[snapped], "rv", label="snapped (landing)")
+    ax.set_xlabel(args.vary)
+    ax.set_ylabel("tip angle (deg)")
+    ax.legend(fontsize=8)
+    fig.savefig(out_dir / "sweep.png", dpi=120)
+    plt.close(fig)
 
 
 def add_rate_sweep_options(w) -> None:

@@ -147,6 +147,7 @@ def branch_on_file(args) -> int:
             None else ""
         np.savetxt(out_dir / "branch.csv", rows, delimiter=",",
                    header=f"{args.vary},tip_angle_deg,min_eig,morse_index{extra}", comments="")
+        _branch_figure(out_dir / "branch.png", values, b, out, args.vary)
     if args.json:
         print(json.dumps(out))
     else:
@@ -161,6 +162,36 @@ def branch_on_file(args) -> int:
             print(f"  {out['status']} (the branch ended at {args.vary} = "
                   f"{out['last_value']:.10g}): {out['message']}")
     return 0 if out["converged"] else 1
+
+
+def _branch_figure(path, values, b, out, vary) -> None:
+    """The tip angle against the varied input: stable solid, unstable dashed, the refined
+    folds (x) and branch points (o), the branch's end marked when it stopped early."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tip, stable = np.degrees(b.tip), b.stable
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    for mask, style, colour, label in ((stable, "-", "C0", "stable"),
+                                       (~stable, "--", "C3", "unstable")):
+        ax.plot(values, np.where(mask, tip, np.nan), style, color=colour, label=label)
+    if np.ptp(tip) < 1e-6:  # a straight branch: its round-off is not a shape
+        ax.set_ylim(np.mean(tip) - 1.0, np.mean(tip) + 1.0)
+    for key, marker, label in (("folds", "kx", "fold"), ("branch_points", "ko",
+                                                          "branch point")):
+        pts = out[key]
+        if pts:
+            ax.plot([p["value"] for p in pts], [p["tip_angle_deg"] for p in pts], marker,
+                    mfc="none", label=label)
+    if not out["complete"]:
+        ax.plot(values[-1:], tip[-1:], "r|", ms=14, label=f"ended: {out['status']}")
+    ax.set_xlabel(vary)
+    ax.set_ylabel("tip angle (deg)")
+    ax.legend(fontsize=8)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
 
 
 def _path_status(b, points, factor) -> dict:
