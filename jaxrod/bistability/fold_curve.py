@@ -5,7 +5,7 @@ of the Moore-Spence system in (x, phi, v, u) (``jaxrod.solvers.fold_curve``), bo
 their scaled coordinates (v = start + span lam, u the same for ``along``), from a fold found
 on the branch. Along the curve the quadratic coefficient F_qq = D^3E[phi, phi, phi] is
 recorded; where it changes sign the curve passes a cusp (the two folds meet and the
-hysteresis closes).
+hysteresis closes), refined by Newton on the Moore-Spence system with F_qq = 0 added.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from jaxrod.equilibria.folds import Fold, folds
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.scene import Input, Scene
-from jaxrod.solvers.fold_curve import FoldCurveOptions, fold_curve_run, split
+from jaxrod.solvers.fold_curve import FoldCurveOptions, event_solve, fold_curve_run, split
 from jaxrod.status import Status
 
 CAPACITY = 400
@@ -39,6 +39,28 @@ class Second:
     def __call__(self, u, args):
         scene, disc, origin, span, origin2, span2 = args
         return scene.replace(self.key, origin2 + span2 * u), disc, origin, span
+
+
+@dataclasses.dataclass(frozen=True)
+class Cusp:
+    """A cusp of a fold curve, refined: the fold where F_qq = D^3E[phi, phi, phi] = 0
+    (``jaxrod.solvers.fold_curve.event_solve``: the Moore-Spence system with that equation
+    added, in (x, phi, v, u)). ``along_value``, ``value``: the two inputs there; the state,
+    the tip angle (degrees), and Newton's report."""
+
+    along_value: float
+    value: float
+    tip_angle_deg: float
+    state: np.ndarray
+    converged: bool
+    residual_norm: float
+    iterations: int
+    status: Status
+
+    def as_dict(self) -> dict:
+        return {"along": self.along_value, "value": self.value,
+                "tip_angle_deg": self.tip_angle_deg, "converged": self.converged,
+                "residual_norm": self.residual_norm, "iterations": self.iterations}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,6 +80,7 @@ class FoldCurve:
     cusp_test: np.ndarray
     status: tuple[Status, ...]
     start: Fold
+    cusps: tuple[Cusp, ...] = ()
 
     @property
     def cusp_indices(self) -> np.ndarray:
@@ -71,8 +94,9 @@ class FoldCurve:
 
         ax = ax or plt.gca()
         ax.plot(self.along_values, self.values, "-", color="C0", label=f"fold in {self.vary}")
-        i = self.cusp_indices
-        ax.plot(self.along_values[i], self.values[i], "k^", label="cusp")
+        if self.cusps:
+            ax.plot([c.along_value for c in self.cusps], [c.value for c in self.cusps], "k^",
+                    label="cusp (refined)")
         ax.set_xlabel(self.along)
         ax.set_ylabel(self.vary)
         return ax
@@ -96,6 +120,20 @@ def _curve_program(w0, directions, scene, disc, origin, span, origin2, span2, op
 
 
 _program = jit(_curve_program, static_argnames=("capacity", "vary", "along"))
+
+
+def _cusp_program(w0, scene, disc, origin, span, origin2, span2, vary, along):
+    model = Structured(Input(vary))
+    args = (scene, disc, origin, span, origin2, span2)
+    res = event_solve(model, Second(along), w0, args)
+    m = disc.size
+    x, _, lam, u = split(res.x, m)
+    at = scene.replace(along, origin2 + span2 * u).replace(vary, origin + span * lam)
+    return res, tip(at, x, disc)[0]
+
+
+_cusps = jit(jax.vmap(_cusp_program, in_axes=(0, None, None, None, None, None, None, None,
+                                               None)), static_argnames=("vary", "along"))
 
 
 def fold_curve(scene: Scene, vary: str, vary_range: tuple[float, float], along: str,
@@ -137,13 +175,33 @@ def fold_curve(scene: Scene, vary: str, vary_range: tuple[float, float], along: 
         k = int(runs.num_points[i])
         w = runs.w[i, :k]
         cols = [origin2 + span2 * w[:, 2 * m + 1], origin + span * w[:, 2 * m],
-                np.degrees(angle[i, :k]), runs.cusp_test[i, :k]]
+                np.degrees(angle[i, :k]), runs.cusp_test[i, :k], w]
         cols = [c[::-1] if rev else c for c in cols]
         parts.append([c[:-1] if rev else c for c in cols])  # the start point once
         status.append(Status(int(runs.status[i])))
-    cat = [np.concatenate([p[j] for p in parts]) for j in range(4)]
-    return FoldCurve(vary=vary, along=along, along_values=cat[0], values=cat[1],
-                     tip_angle_deg=cat[2], cusp_test=cat[3], status=tuple(status), start=f)
+    cat = [np.concatenate([p[j] for p in parts]) for j in range(5)]
+    curve = FoldCurve(vary=vary, along=along, along_values=cat[0], values=cat[1],
+                      tip_angle_deg=cat[2], cusp_test=cat[3], status=tuple(status), start=f)
+    idx = curve.cusp_indices
+    if len(idx) == 0:
+        return curve
+    # each cusp refined from the bracket's point with the smaller |F_qq|
+    test = curve.cusp_test
+    pick = np.where(np.abs(test[idx]) <= np.abs(test[idx + 1]), idx, idx + 1)
+    res, angles = jax.device_get(_cusps(jnp.asarray(cat[4][pick]), scene, disc, origin, span,
+                                        origin2, span2, vary, along))
+    cusps = []
+    for i, j in enumerate(idx):
+        x, _, lam, u = split(res.x[i], m)
+        a_value, value = origin2 + span2 * float(u), origin + span * float(lam)
+        # converged, and in its bracket (widened by the bracket's width on each side)
+        a_lo, a_hi = sorted((float(curve.along_values[j]), float(curve.along_values[j + 1])))
+        width = max(a_hi - a_lo, 1e-12 * span2)
+        conv = bool(res.converged[i]) and a_lo - width <= a_value <= a_hi + width
+        cusps.append(Cusp(a_value, value, float(np.degrees(angles[i])), np.asarray(x), conv,
+                          float(res.residual_norm[i]), int(res.iterations[i]),
+                          Status.of(conv)))
+    return dataclasses.replace(curve, cusps=tuple(cusps))
 
 
-__all__ = ["FoldCurve", "fold_curve"]
+__all__ = ["Cusp", "FoldCurve", "fold_curve"]

@@ -10,6 +10,7 @@ import numpy as np
 
 from jaxrod.cli.scene_file import _load, _range
 from jaxrod.params import ParameterError
+from jaxrod.status import Status
 
 
 def _axis(text: str, what: str, file):
@@ -38,19 +39,23 @@ def foldcurve_on_file(args) -> int:
     a0 = float(np.asarray(file.scene.value(along)))
     curve = jr.fold_curve(file.scene, key, (start, stop), along, (a0, a_factor * args.along_to),
                           which=args.which, n=args.n)
-    cusps = [{"along": float(0.5 * (curve.along_values[i] + curve.along_values[i + 1]))
-              / a_factor, "value": float(curve.values[i]) / factor}
-             for i in curve.cusp_indices]
+    cusps = [{**c.as_dict(), "along": c.along_value / a_factor, "value": c.value / factor}
+             for c in curve.cusps]
+    failed = [s for s in curve.status if not s.ok]
+    status = failed[0] if failed else (
+        Status.SUCCESS if all(c.converged for c in curve.cusps) else Status.NOT_CONVERGED)
     out = {"vary": args.vary, "along": args.along,
            "along_values": (curve.along_values / a_factor).tolist(),
            "values": (curve.values / factor).tolist(),
            "tip_angle_deg": curve.tip_angle_deg.tolist(), "cusps": cusps,
-           "status": [s.name.lower() for s in curve.status],
-           "converged": all(s.ok for s in curve.status)}
+           "curve_status": [s.name.lower() for s in curve.status],
+           "status": status.name.lower(), "converged": status == Status.SUCCESS}
     if args.out:
         from jaxrod.cli._output import _output_dir
 
-        (_output_dir(args.out) / "foldcurve.json").write_text(json.dumps(out, indent=1))
+        out_dir = _output_dir(args.out)
+        (out_dir / "foldcurve.json").write_text(json.dumps(out, indent=1))
+        _curve_figure(out_dir / "foldcurve.png", out, args)
     if args.json:
         print(json.dumps(out))
     else:
@@ -60,6 +65,25 @@ def foldcurve_on_file(args) -> int:
             print(f"  cusp near {args.along} = {c['along']:.8g}, {args.vary} = "
                   f"{c['value']:.8g}")
     return 0 if out["converged"] else 1
+
+
+def _curve_figure(path, out, args) -> None:
+    """The fold's value of ``vary`` against ``along``, the refined cusps marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    ax.plot(out["along_values"], out["values"], "-", label=f"fold in {args.vary}")
+    if out["cusps"]:
+        ax.plot([c["along"] for c in out["cusps"]], [c["value"] for c in out["cusps"]], "k^",
+                label="cusp (refined)")
+    ax.set_xlabel(args.along)
+    ax.set_ylabel(args.vary)
+    ax.legend(fontsize=8)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
 
 
 def map_on_file(args) -> int:
