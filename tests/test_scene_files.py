@@ -2,6 +2,8 @@
 with scipy (an independent method), its snap when the field rotates, the paper's rig
 written as a file against the paper's own fold path, and bad files."""
 
+import contextlib
+import io
 import json
 import math
 import subprocess
@@ -71,14 +73,16 @@ def shooting_equilibria(lam, a, G=0.0, k_max=12.0, count=241, phi=None):
 
 @pytest.mark.parametrize("angle_deg, load, g", [
     (30.0, 1.0, 0.0), (90.0, 5.0, 0.0), (150.0, 10.0, 0.0), (179.5, 20.0, 0.0),
-    (120.0, 20.0, 0.0), (90.0, 5.0, 9.81), (179.5, 3.0, 9.81)])
+    (120.0, 20.0, 0.0), (90.0, 5.0, 9.81), (179.5, 3.0, 9.81), (120.0, 5.0, -9.81)])
 def test_hard_magnetic_cantilever_against_shooting(cantilever, angle_deg, load, g):
     """Tip tangent angle and tip position of the scene file's cantilever (SI, gravity from
-    the rod's density) against shooting, 1e-9 degrees and 1e-11 rod lengths; the equilibrium
-    reached by the ramp is stable."""
+    the rod's density; g < 0 here: the rod hanging, [gravity] hanging = true) against
+    shooting, 1e-9 degrees and 1e-11 rod lengths; the equilibrium reached by the ramp is
+    stable."""
     settings = [f"field.0.angle_deg={angle_deg}", f"field.0.B={load / LAMBDA_PER_TESLA}"]
     if g:
-        settings += ["rod.density=100", f"gravity.g={g}"]  # G = 1.96
+        settings += ["rod.density=100", f"gravity.g={abs(g)}"]  # |G| = 1.96
+        settings += ["gravity.hanging=true"] if g < 0 else []
     file = load_file(cantilever, settings)
     G = float(file.scene.terms["gravity"].G) if g else 0.0
     eq = jr.equilibrium(file.scene, n=32)
@@ -461,3 +465,31 @@ def test_cli_sweep_of_a_scene_file_snaps_past_the_fold():
     proc = _cli("sweep", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg", "--from",
                 "90", "--to", "180", "--rate", "5", "--damping", "2", "--json")
     assert proc.returncode == 0 and json.loads(proc.stdout)["switches"] == []  # no fold
+
+
+def test_cli_snap_and_sweep_outputs_of_a_scene_file(tmp_path):
+    """jaxrod snap RIG --fold 1: the snap from the first fold of the field's rotation round
+    the hard-magnetic cantilever; the rod comes to rest on an equilibrium that shooting
+    finds at the value it was moved to (1e-8 deg). jaxrod sweep RIG --out writes the sweep's
+    CSV (one row a value, the snap marked), JSON and figure."""
+    from jaxrod.cli import main
+
+    with contextlib.redirect_stdout(io.StringIO()) as out:
+        assert main(["snap", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg",
+                     "--from", "90", "--to", "300", "--fold", "1", "--t-end", "40",
+                     "--json"]) == 0
+    s = json.loads(out.getvalue())
+    assert 212.0 < s["fold_value"] < s["value"] < 212.3 and s["duration"] is not None
+    landings = [math.degrees(math.atan2(x1, x3)) for _, x1, x3 in
+                shooting_equilibria(5.0, math.radians(s["value"]))]
+    assert min(abs(t - s["rest_tip_deg"]) for t in landings) <= 1e-8
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["sweep", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg",
+                     "--from", "90", "--to", "220", "--step", "5", "--quiet", "--out",
+                     str(tmp_path / "sweep")]) == 0
+    rows = (tmp_path / "sweep" / "sweep.csv").read_text().splitlines()
+    assert rows[0].startswith("field.0.angle_deg,tip_angle_deg") and len(rows) == 28
+    assert sum(int(r.split(",")[4]) for r in rows[1:]) == 1  # one snap
+    summary = json.loads((tmp_path / "sweep" / "sweep.json").read_text())
+    assert summary["complete"] and len(summary["snaps"]) == 1
+    assert (tmp_path / "sweep" / "sweep.png").stat().st_size > 0

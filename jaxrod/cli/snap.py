@@ -17,6 +17,13 @@ def cmd_snap(args) -> int:
     from jaxrod.dynamics.snap import snap
 
     _check_before_work(args)
+    from jaxrod.cli.scene_file import uses_scene_file
+
+    if uses_scene_file(args):
+        return snap_on_file(args)
+    if args.fold not in ("lower", "upper"):
+        raise ParameterError(f"fold: lower or upper for the paper's rig (a number K picks the "
+                             f"K-th fold of a scene file's path), got {args.fold!r}")
     physical = _physical_snap(args)
     for name in ("damping", "kelvin_voigt"):
         v = getattr(args, name)
@@ -54,7 +61,7 @@ def cmd_snap(args) -> int:
                 "duration_s": None if s.duration is None else s.duration * T,
                 "transit_s": None if s.transit is None else s.transit * T,
                 "time_s": (s.trajectory.time * T).tolist()}
-    _write_outputs(args, scene, s, out)
+    _write_outputs(args, scene, s, out, "magnet.alpha")
     if args.json:
         print(json.dumps(out))
     else:
@@ -67,6 +74,53 @@ def cmd_snap(args) -> int:
               f"magnet at {out['alpha_deg']:.8f} deg): duration {d}, tip "
               f"{fold.tip_angle_deg:.4f} -> {s.rest_tip_deg:.4f} deg, peak tip speed "
               f"{s.peak_tip_speed:.4g} deg per unit time, overshoot {s.overshoot_deg:.4g} deg")
+    return 0 if s.trajectory.converged else 1
+
+
+def snap_on_file(args) -> int:
+    """``jaxrod snap RIG --vary KEY --from A --to B --fold K``: the snap from the K-th fold
+    (1 = the first) met along KEY, the input moved just past it; the same outputs as the
+    paper's rig (time in L^2 sqrt(rho A_c / (E I)))."""
+    import jaxrod as jr
+    from jaxrod.cli.scene_file import _load, _range
+    from jaxrod.dynamics.snap import snap
+
+    for name in ("damping", "kelvin_voigt"):
+        v = getattr(args, name)
+        if v < 0 or not math.isfinite(v):
+            raise ParameterError(f"{name.replace('_', '-')} must be a finite number >= 0, got "
+                                 f"{v!r}")
+    try:
+        k = {"lower": 1, "upper": 2}.get(args.fold) or int(args.fold)
+    except ValueError:
+        raise ParameterError(f"fold: a number K >= 1 (the K-th fold met), got "
+                             f"{args.fold!r}") from None
+    if k < 1:
+        raise ParameterError(f"fold: a number K >= 1 (the K-th fold met), got {args.fold!r}")
+    file = _load(args)
+    key, start, stop, factor = _range(args, file)
+    folds = jr.scene_folds(file.scene, key, start, stop, n=args.n, margins=file.margins)
+    if len(folds) < k:
+        raise ParameterError(f"fold: the path along {args.vary} from {args.start:g} to "
+                             f"{args.stop:g} meets {len(folds)} fold(s); --fold {k} asks for "
+                             f"fold {k}")
+    fold = folds[k - 1]
+    s = snap(file.scene, fold, args.damping, t_end=args.t_end, dt=args.dt, n=args.n,
+             kelvin_voigt=args.kelvin_voigt, scheme=args.scheme)
+    out = {"rig": args.rig, "set": args.set, "vary": args.vary, "fold": k,
+           "fold_value": fold.value / factor, "value": s.value / factor,
+           "damping": args.damping, "kelvin_voigt": args.kelvin_voigt, **s.as_dict(),
+           "units": "time in L^2 sqrt(rho A_c / (E I)); angles in degrees"}
+    out["value"] = s.value / factor
+    _write_outputs(args, file.scene, s, out, fold.vary)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        d = "not settled by t_end" if s.duration is None else f"{s.duration:.6g}"
+        print(f"{args.rig}: snap from fold {k} ({args.vary} = {out['fold_value']:.10g}, moved "
+              f"to {out['value']:.10g}): duration {d}, tip {fold.tip_angle_deg:.4f} -> "
+              f"{s.rest_tip_deg:.4f} deg, peak tip speed {s.peak_tip_speed:.4g} deg per unit "
+              f"time, overshoot {s.overshoot_deg:.4g} deg")
     return 0 if s.trajectory.converged else 1
 
 
@@ -110,8 +164,10 @@ def _physical_snap(args):
 
 
 def add_snap(sub) -> None:
-    sn = sub.add_parser("snap", help="the snap from a fold of the permanent-magnet scene "
-                        "(time series, duration)")
+    from jaxrod.cli.scene_file import add_scene_file_inputs
+
+    sn = sub.add_parser("snap", help="the snap from a fold of the permanent-magnet scene, or "
+                        "of any scene file's path (time series, duration)")
     sn.add_argument("--G", type=_float("G", "G-magnet"), help="gravity group")
     sn.add_argument("--M", type=_float("M", "M"), help="magnet group")
     sn.add_argument("--D", type=_float("D", "D"), help="track radius / length")
@@ -119,7 +175,10 @@ def add_snap(sub) -> None:
                     help="the paper's nickel wire and magnet, in seconds")
     sn.add_argument("--medium", choices=["air", "vacuum"], default="air",
                     help="with --preset: the drag (air: Lamb's law; vacuum: none)")
-    sn.add_argument("--fold", choices=["lower", "upper"], default="upper")
+    add_scene_file_inputs(sn, vary=True)
+    sn.add_argument("--fold", default="upper",
+                    help="the paper's rig: lower or upper (default upper); a scene file: K, "
+                    "the K-th fold met along --vary (lower = 1, upper = 2)")
     sn.add_argument("--damping", type=_float("damping"), default=1.0,
                     help="linear drag per unit length, units sqrt(rho A_c E I) / L^2")
     sn.add_argument("--t-end", type=_float("t-end"), default=60.0)
@@ -140,8 +199,8 @@ def add_snap(sub) -> None:
 
 
 
-def _write_outputs(args, scene, s, out) -> None:
-    """--csv, --plot, --animate."""
+def _write_outputs(args, scene, s, out, vary: str) -> None:
+    """--csv, --plot, --animate (the scene at the snap's value of ``vary``)."""
     tr = s.trajectory
     scale = out.get("time_scale_s")
     if args.csv:
@@ -157,7 +216,7 @@ def _write_outputs(args, scene, s, out) -> None:
     if args.plot or args.animate:
         from jaxrod.dynamics import figures
 
-        at = scene.replace("magnet.alpha", s.value)
+        at = scene.replace(vary, s.value)
         if args.plot:
             figures.snap_figure(s, time_scale=scale).savefig(args.plot, dpi=150)
         if args.animate:

@@ -21,7 +21,9 @@ A file in SI units (the default) or, with ``units = "nondimensional"``, in the g
                      radially outward), or on any curve: path = "curve", coefficients =
                      [[x0, z0], [x1, z1], ...] (c(t) = a0 + a1 t + ...), t,
                      moment_along_path = true or moment_direction
-    [gravity]        g (m/s^2, along -z: the rod standing up) or G (rho g A_c L^3 / (E I))
+    [gravity]        g (m/s^2, along -z: the rod standing up) or G (rho g A_c L^3 / (E I));
+                     hanging = true: gravity along +z, the rod hanging from its clamp (the
+                     same as a negative g or G)
 
 and top-level ``geometry = "planar"`` (default) or ``"3d"``. The terms of the scene are
 ``bending``, ``gravity`` and ``field0``, ``field1``, ...; a file key names an input by its
@@ -60,7 +62,7 @@ TABLES = {
             "nondimensional": ("support",)},
     "magnetisation": {"si": ("kind", "remanence", "saturation", "angle_deg", "profile_deg"),
                       "nondimensional": ("kind", "angle_deg", "profile_deg")},
-    "gravity": {"si": ("g",), "nondimensional": ("G",)},
+    "gravity": {"si": ("g", "hanging"), "nondimensional": ("G", "hanging")},
 }
 FIELD_KEYS = {
     "uniform": {"si": ("kind", "B", "angle_deg"),
@@ -293,15 +295,23 @@ def scene_from(data: dict) -> FileScene:
         L = 1.0
     if "gravity" in data:
         g_table = tables["gravity"]
+        hanging = g_table.get("hanging", False)
+        if not isinstance(hanging, bool):
+            _fail("gravity.hanging", f"must be true or false, got {hanging!r}")
+        key = "g" if si else "G"
+        if hanging and _number(g_table, key, "gravity.") < 0:
+            _fail(f"gravity.{key}", "with hanging = true give the magnitude (>= 0): the rod "
+                                    "hangs from its clamp, gravity along its axis")
+        sign = -1.0 if hanging else 1.0  # hanging: gravity along +z, from the clamp to the tip
         if si:
             rho = _number(rod, "density", "rod.")
-            per_g = rho * area * L**3 / bending
+            per_g = sign * rho * area * L**3 / bending
             g = _number(g_table, "g", "gravity.")
             terms["gravity"] = Gravity(per_g * g)
             inputs["gravity.g"] = ("gravity.G", per_g)
         else:
-            terms["gravity"] = Gravity(_number(g_table, "G", "gravity."))
-            inputs["gravity.G"] = ("gravity.G", 1.0)
+            terms["gravity"] = Gravity(sign * _number(g_table, "G", "gravity."))
+            inputs["gravity.G"] = ("gravity.G", sign)
     mag = tables["magnetisation"]
     kind = mag.get("kind")
     if fields and kind not in ("hard", "soft"):
