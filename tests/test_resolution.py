@@ -63,17 +63,17 @@ def test_large_loads_are_right_or_say_they_are_not(load):
     if r.converged:
         assert error <= 1e-9, (load, r.n, error)
     else:
-        assert r.status == jr.Status.UNDER_RESOLVED and r.error_estimate > 1e-10
+        assert r.status == jr.Status.UNDER_RESOLVED and r.error_estimate > 1e-8
     if load == 1e3:  # resolved within the degrees tried
         assert r.converged and r.n > 16
 
 
 def test_the_command_raises_n_or_says_under_resolved():
-    """jaxrod equilibrium: B = 0.25 T (load 1000) resolved by raising N, exit 0;
-    B = 1.25 T (load 5000, a field typed in T for mT) under_resolved with its estimate,
-    exit 1, converged false."""
+    """jaxrod equilibrium: B = 0.25 T (load 1000, a field typed in T for mT) resolved by
+    raising N, exit 0; B = 5 T (load 20000) under_resolved with its estimate, exit 1,
+    converged false."""
     outs = []
-    for B, code in (("0.25", 0), ("1.25", 1)):
+    for B, code in (("0.25", 0), ("5.0", 1)):
         with contextlib.redirect_stdout(io.StringIO()) as out:
             assert main(["equilibrium", "hard-magnetic-cantilever", "--set",
                          f"field.0.B={B}", "--json"]) == code
@@ -83,4 +83,4 @@ def test_the_command_raises_n_or_says_under_resolved():
     assert abs(ok["tip_tangent_deg"] - math.degrees(elastica_tip_tangent(1000.0, math.pi / 2))) \
         <= 1e-9
     assert not under["converged"] and under["status"] == "under_resolved"
-    assert under["error_estimate"] > 1e-10 and np.isfinite(under["tip_tangent_deg"])
+    assert under["error_estimate"] > 1e-8 and np.isfinite(under["tip_tangent_deg"])

@@ -103,7 +103,6 @@ def branch_on_file(args) -> int:
     """``jaxrod branch RIG --vary KEY --from A --to B``: the branch's points, its folds and
     its branch points (JSON with --json; branch.csv and branch.json with --out)."""
 
-    import jaxrod as jr
 
     if getattr(args, "modes", 0):
         from jaxrod.dynamics.modes import resolvable
@@ -114,12 +113,10 @@ def branch_on_file(args) -> int:
                                  f"{args.modes}")
     file = _load(args)
     key, start, stop, factor = _range(args, file)
-    from jaxrod.equilibria.branch_points import refine_branch_points
-    from jaxrod.equilibria.folds import refine
+    from jaxrod.equilibria.resolution import resolved_branch
 
-    b = jr.branch(file.scene, key, start, stop, n=args.n, margins=file.margins)
-    folds = refine(file.scene, b, n=args.n)
-    points = refine_branch_points(file.scene, b, n=args.n)
+    r = resolved_branch(file.scene, key, start, stop, n=args.n, margins=file.margins)
+    b, folds, points = r.branch, r.folds, r.branch_points
     values = np.asarray(b.value) / factor
     out = {"vary": args.vary, "points": len(values),
            "value": values.tolist(), "tip_angle_deg": np.degrees(b.tip).tolist(),
@@ -128,13 +125,14 @@ def branch_on_file(args) -> int:
            "branch_points": [{"value": p.value / factor,
                               **_at(p.tip_angle_deg, p.tip_position, file),
                               "morse_index": list(p.morse_index), "converged": p.converged,
-                              "residual_norm": p.residual_norm} for p in points],
-           **_path_status(b, folds + points, factor)}
+                              "residual_norm": p.residual_norm,
+                              "error_estimate": p.error_estimate} for p in points],
+           **_path_status(r, factor)}
     w2 = None
     if getattr(args, "modes", 0):  # the vibration modes as rows of the branch
         from jaxrod.dynamics.modes import modes_along
 
-        w2 = modes_along(file.scene, b, n=args.n, count=args.modes)
+        w2 = modes_along(file.scene, b, n=r.n, count=args.modes)
         out["omega_squared"] = w2.tolist()
     if args.out:
         from jaxrod.cli._output import _output_dir
@@ -194,43 +192,47 @@ def _branch_figure(path, values, b, out, vary) -> None:
     plt.close(fig)
 
 
-def _path_status(b, points, factor) -> dict:
-    """What a branch and its refined points say, as the commands print it: ``converged``
-    (the branch reached the end of its range and every point converged), ``status`` (why
-    not: the branch's first failing status, else ``not_converged`` for a point), the
-    branch's statuses, ``complete`` and ``last_value`` (where it ended)."""
+def _path_status(r, factor) -> dict:
+    """What a resolved branch and its refined points say, as the commands print it:
+    ``converged`` (the branch reached the end of its range, every point converged and the
+    degree resolves them), ``status`` (why not: the branch's first failing status, else
+    ``not_converged`` for a point, else ``under_resolved``), the branch's statuses,
+    ``complete``, ``last_value`` (where it ended), ``n`` and ``error_estimate``."""
+    b = r.branch
     failed = [s for s in b.status if not s.ok]
-    status = failed[0] if failed else (Status.SUCCESS if all(p.converged for p in points)
-                                       else Status.NOT_CONVERGED)
+    status = failed[0] if failed else (
+        Status.NOT_CONVERGED if not all(p.converged for p in r.folds + r.branch_points) else
+        Status.SUCCESS if r.resolved else Status.UNDER_RESOLVED)
     return {"converged": status == Status.SUCCESS and b.complete,
             "status": status.name.lower(), "message": status.message,
             "branch_status": [s.name.lower() for s in b.status], "complete": b.complete,
-            "last_value": float(b.value[-1]) / factor}
+            "last_value": float(b.value[-1]) / factor, "n": r.n,
+            "error_estimate": r.error_estimate}
 
 
 def _fold(f, factor, file) -> dict:
     return {"value": f.value / factor, **_at(f.tip_angle_deg, f.tip_position, file),
             "dF_dvalue": f.dF_dvalue * factor, "normal_form_c": f.normal_form_c,
-            "converged": f.converged, "residual_norm": f.residual_norm}
+            "converged": f.converged, "residual_norm": f.residual_norm,
+            "error_estimate": f.error_estimate}
 
 
 def folds_on_file(args) -> int:
     """``jaxrod folds RIG --vary KEY --from A --to B``: the folds met along the path, in
     order."""
-    import jaxrod as jr
-    from jaxrod.equilibria.folds import refine
+    from jaxrod.equilibria.resolution import resolved_branch
 
     file = _load(args)
     key, start, stop, factor = _range(args, file)
-    b = jr.branch(file.scene, key, start, stop, n=args.n, margins=file.margins)
-    folds = refine(file.scene, b, n=args.n)
-    out = {"vary": args.vary, "folds": [_fold(f, factor, file) for f in folds],
-           **_path_status(b, folds, factor), "n": args.n}
+    r = resolved_branch(file.scene, key, start, stop, n=args.n, margins=file.margins,
+                        points=False)
+    out = {"vary": args.vary, "folds": [_fold(f, factor, file) for f in r.folds],
+           **_path_status(r, factor)}
     if args.json:
         print(json.dumps(out))
     else:
-        print(f"{args.rig}: {len(folds)} folds along {args.vary} from {args.start:g} to "
-              f"{args.stop:g}")
+        print(f"{args.rig}: {len(r.folds)} folds along {args.vary} from {args.start:g} to "
+              f"{args.stop:g} (N = {r.n}, error estimate {r.error_estimate:.1e} rad)")
         for f in out["folds"]:
             print(f"  fold at {args.vary} = {f['value']:.10f} (tip angle "
                   f"{f['tip_angle_deg']:.10f} deg)"
@@ -246,7 +248,7 @@ def add_equilibrium(sub) -> None:
     add_scene_file_inputs(e, vary=False)
     e.add_argument("--n", type=_degree("N-magnet"), default=16,
                    help="the first Chebyshev degree, 4-64 (default 16), raised until the "
-                   "state's Chebyshev tail is below 1e-10 rad (else under_resolved)")
+                   "state's Chebyshev tail is at most 1e-8 rad (else under_resolved)")
     e.add_argument("--json", action="store_true", help="print one JSON object")
     e.set_defaults(func=cmd_equilibrium)
 

@@ -31,6 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.derivatives import Structured
+from jaxrod.discretise.tail import tail_estimate
 from jaxrod.equilibria.branch import _observed, branch, branch_options, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
 from jaxrod.equilibria.folds import _span
@@ -133,7 +134,7 @@ def refine_branch_points(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Br
             state=np.asarray(x[i]), null_vector=np.asarray(phi[i]), unfolding=float(mu[i]),
             morse_index=(int(b.morse_index[j]), int(b.morse_index[j + 1])), converged=conv,
             residual_norm=float(res.residual_norm[i]), iterations=int(res.iterations[i]),
-            status=Status.of(conv)))
+            status=Status.of(conv), error_estimate=tail_estimate(disc, x[i])))
     return points
 
 

@@ -22,6 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.derivatives import Structured
+from jaxrod.discretise.tail import tail_estimate
 from jaxrod.equilibria.branch import branch, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
 from jaxrod.equilibria.record import Branch, SpecialPoint, checked
@@ -88,7 +89,7 @@ def refine(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Fold]:
             state=np.asarray(fp.x[i]), null_vector=phi, converged=conv,
             residual_norm=float(fp.newton.residual_norm[i]),
             iterations=int(fp.newton.iterations[i]),
-            status=Status.of(conv)))
+            status=Status.of(conv), error_estimate=tail_estimate(disc, fp.x[i])))
     return folds
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import math
 from pathlib import Path
 
 import numpy as np
@@ -156,8 +157,10 @@ def branch_from_runs(runs: list[tuple[RawBranch, bool, tuple]]) -> Branch:
 class SpecialPoint:
     """A special point of a branch in the input ``vary`` (a fold, a branch point), refined:
     ``value`` the input there, ``tip_angle_deg`` (the tip's direction from +z toward +x) and
-    ``tip_position`` of its ``state``, the Hessian's kernel ``null_vector``, and the
-    refinement's ``converged``, ``residual_norm``, ``iterations`` and ``status``."""
+    ``tip_position`` of its ``state``, the Hessian's kernel ``null_vector``, the
+    refinement's ``converged``, ``residual_norm``, ``iterations`` and ``status``, and the
+    state's ``error_estimate`` (the tail of its Chebyshev series, radians:
+    ``jaxrod.discretise.tail``; NaN where not computed)."""
 
     vary: str
     value: float
@@ -169,13 +172,16 @@ class SpecialPoint:
     residual_norm: float
     iterations: int
     status: Status
+    error_estimate: float = dataclasses.field(default=math.nan, kw_only=True)
 
     def as_dict(self) -> dict:
-        """The scalars (the arrays ``state`` and ``null_vector`` left out)."""
+        """The scalars (the arrays ``state`` and ``null_vector`` left out; the error
+        estimate where computed)."""
         out = {}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
-            if f.name in ("state", "null_vector", "vary", "status"):
+            if f.name in ("state", "null_vector", "vary", "status") or (
+                    f.name == "error_estimate" and math.isnan(v)):
                 continue
             out[f.name] = [float(x) for x in v] if f.name == "tip_position" else \
                 list(v) if isinstance(v, tuple) else v

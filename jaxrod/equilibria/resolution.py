@@ -1,25 +1,16 @@
-"""A posteriori error estimates of a discrete state, and N raised until it is at round-off.
+"""N raised until an answer is at round-off, by its a posteriori error estimate (the tail of
+its Chebyshev series, ``jaxrod.discretise.tail``), or a status that says it is not.
 
-A state's angles (theta, or the director chart's v1 and v2) are polynomials of degree N on
-the Chebyshev grid; their Chebyshev coefficients c_k of a smooth solution decay
-geometrically, so the first neglected ones are of the size of the last kept: the estimate
-
-    e(N) = max over the angles of max(|c_{N-2}|, |c_{N-1}|, |c_N|)   (radians)
-
-bounds the discretisation's error in the angles (to within the decay's ratio). A boundary
-layer (a hard-magnetic rod at a load of 1000: a layer of width 1 / sqrt(1000) at the clamp)
-leaves the tail large at the default N, where Newton still converges to 1e-13: the residual
-says nothing about resolution, the tail does. ``resolved_equilibrium`` raises N through
-``DEGREES`` until e(N) <= ``tol``, or says UNDER_RESOLVED with the estimate.
+``resolved_equilibrium`` raises N through ``DEGREES`` until the equilibrium's tail is at most
+``TOLERANCE``; ``resolved_branch`` does the same for a branch and its refined folds and
+branch points (the command line's ``equilibrium``, ``folds`` and ``branch`` on scene files).
 """
 
 from __future__ import annotations
 
 import dataclasses
 
-import numpy as np
-
-from jaxrod import spectral
+from jaxrod.discretise.tail import tail_estimate
 from jaxrod.equilibria.equilibrium import DEFAULT_N, Equilibrium, discretise, equilibrium
 from jaxrod.scenes.scene import Scene
 from jaxrod.status import Status
@@ -28,20 +19,12 @@ from jaxrod.status import Status
 #: round-off there.
 DEGREES = (16, 24, 32, 48, 64)
 
-#: Resolved: the tail of the angles' Chebyshev coefficients below this (radians). The tail
-#: bounds the angles' error along the whole rod, boundary layers included; the tip's angles
-#: converge faster (a hard-magnetic cantilever at load 5, N = 16: tail 2e-10 rad, tip
-#: tangent within 1e-14 degrees of N = 32's), so tip angles are then right to 1e-9 degrees.
-TOLERANCE = 1e-10
-
-
-def tail_estimate(disc, x) -> float:
-    """e(N) of the state x of the discretisation ``disc`` (module docstring), radians."""
-    planar = getattr(disc, "planar", disc)
-    to_coefficients = spectral.values_to_coefficients_matrix(planar.n)
-    angles = np.asarray(x, float).reshape(-1, planar.size)
-    c = np.asarray(to_coefficients) @ (np.asarray(planar.to_full) @ angles.T)
-    return float(np.max(np.abs(c[-3:])))
+#: Resolved: the tail of the angles' Chebyshev coefficients at most this (radians): the
+#: angles along the rod to ~1e-8 rad, and the tip's angles and folds' values, which converge
+#: faster, far below 1e-9 degrees (a hard-magnetic cantilever at load 5, N = 16: tail 2e-10,
+#: tip tangent within 1e-14 degrees of N = 32's; its folds in the field's angle, tail 2e-9:
+#: 3e-14 degrees from N = 24's; the paper's folds at N = 12, tail 5e-9: 2e-12 degrees).
+TOLERANCE = 1e-8
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,3 +57,39 @@ def resolved_equilibrium(scene: Scene, n: int = DEFAULT_N, n_max: int = DEGREES[
         if error <= tol:
             return ResolvedEquilibrium(eq, d, error, eq.status)
     return ResolvedEquilibrium(eq, d, error, Status.UNDER_RESOLVED)
+
+
+@dataclasses.dataclass(frozen=True)
+class ResolvedBranch:
+    """A branch along an input, its refined folds and branch points, at the degree ``n``
+    that resolves them (or the largest tried); ``error_estimate``: the largest tail of the
+    branch's states and its points' (radians); ``resolved``: at most ``TOLERANCE``."""
+
+    branch: object
+    folds: list
+    branch_points: list
+    n: int
+    error_estimate: float
+    resolved: bool
+
+
+def resolved_branch(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
+                    margins: dict | None = None, n_max: int = DEGREES[-1],
+                    tol: float = TOLERANCE, points: bool = True) -> ResolvedBranch:
+    """The branch of ``scene`` along ``vary`` from ``start`` to ``stop`` with its folds (and,
+    with ``points``, its branch points), N raised through ``DEGREES`` from ``n`` until the
+    largest tail of the branch's states and its special points' is at most ``tol``."""
+    from jaxrod.equilibria.branch import branch
+    from jaxrod.equilibria.branch_points import refine_branch_points
+    from jaxrod.equilibria.folds import refine
+
+    degrees = [n] + [d for d in DEGREES if n < d <= n_max]
+    for d in degrees:
+        b = branch(scene, vary, start, stop, d, margins=margins)
+        folds = refine(scene, b, d)
+        bps = refine_branch_points(scene, b, d) if points else []
+        disc = discretise(scene, d)
+        error = max([tail_estimate(disc, b.theta)] + [p.error_estimate for p in folds + bps])
+        if error <= tol:
+            break
+    return ResolvedBranch(b, folds, bps, d, error, error <= tol)
