@@ -2,7 +2,7 @@
 tail) and N raised until it is at round-off, or a status that says it is not. Against the
 first integral of the hard-magnetic elastica at loads 5 to 1e5 (a boundary layer of width
 1 / sqrt(load) at the clamp: N = 16 was 6e-5 degrees off at load 1000 and 0.9 at 25000,
-reported converged)."""
+reported converged), and scipy's collocation for heavy hanging rods up to G = 1000."""
 
 import contextlib
 import io
@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import quad
+from scipy.integrate import quad, solve_bvp
 from scipy.optimize import brentq
 
 import jaxrod as jr
@@ -66,6 +66,33 @@ def test_large_loads_are_right_or_say_they_are_not(load):
         assert r.status == jr.Status.UNDER_RESOLVED and r.error_estimate > 1e-8
     if load == 1e3:  # resolved within the degrees tried
         assert r.converged and r.n > 16
+
+
+def heavy_rod_tip_tangent(G, load, psi):
+    """The tip tangent (radians) of the heavy rod (G < 0: hanging) with a hard magnetisation
+    in a uniform field at psi, theta'' = -load sin(psi - theta) - G (1 - s) sin(theta),
+    theta(0) = 0, theta'(1) = 0, by scipy's collocation (solve_bvp, relative residual 1e-10:
+    an independent method, ~1e-13 degrees here)."""
+    f = lambda s, y: np.vstack([y[1], -load * np.sin(psi - y[0]) - G * (1 - s) * np.sin(y[0])])
+    bc = lambda y0, y1: np.array([y0[0], y1[1]])
+    s = np.linspace(0.0, 1.0, 2001)
+    sol = solve_bvp(f, bc, s, np.zeros((2, s.size)), tol=1e-10, max_nodes=100000,
+                    bc_tol=1e-13)
+    assert sol.status == 0, sol.message
+    return sol.y[0, -1]
+
+
+@pytest.mark.parametrize("G", [-100.0, -500.0, -1000.0])
+def test_heavy_hanging_rods_to_a_billionth_of_a_degree(G):
+    """A hanging rod up to G = 1000 pushed sideways by a field (a layer of width
+    |G|^(-1/3) at the clamp): the command's N (raised until resolved) gives the tip tangent
+    of scipy's collocation to 1e-9 degrees."""
+    scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(G),
+                      "field": Zeeman(5.0, math.pi / 2)})
+    r = resolved_equilibrium(scene)
+    assert r.converged and r.error_estimate <= 1e-8
+    reference = math.degrees(heavy_rod_tip_tangent(G, 5.0, math.pi / 2))
+    assert abs(r.equilibrium.tip_tangent_deg - reference) <= 1e-9
 
 
 def test_the_command_raises_n_or_says_under_resolved():
