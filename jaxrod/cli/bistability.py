@@ -154,7 +154,8 @@ def cmd_map(args) -> int:
               f"computed, {counts['resumed']} already done) -> {out}")
         if "reason_counts" in summary:
             print(", ".join(f"{k}: {v}" for k, v in summary["reason_counts"].items()))
-    return 0
+    # a point whose solve failed makes the map a failed solve (exit 1; the map is kept)
+    return 1 if summary.get("reason_counts", {}).get("not_converged", 0) else 0
 
 
 def add_cusp(sub) -> None:
