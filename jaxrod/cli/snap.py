@@ -25,11 +25,6 @@ def cmd_snap(args) -> int:
         raise ParameterError(f"fold: lower or upper for the paper's rig (a number K picks the "
                              f"K-th fold of a scene file's path), got {args.fold!r}")
     physical = _physical_snap(args)
-    for name in ("damping", "kelvin_voigt"):
-        v = getattr(args, name)
-        if v < 0 or not math.isfinite(v):
-            raise ParameterError(f"{name.replace('_', '-')} must be a finite number >= 0, got "
-                                 f"{v!r}")
     scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(args.G),
                       "magnet": jr.Dipole(args.M, args.D, 0.0)})
     folds = sorted(jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=args.n),
@@ -85,11 +80,6 @@ def snap_on_file(args) -> int:
     from jaxrod.cli.scene_file import _load, _range
     from jaxrod.dynamics.snap import snap
 
-    for name in ("damping", "kelvin_voigt"):
-        v = getattr(args, name)
-        if v < 0 or not math.isfinite(v):
-            raise ParameterError(f"{name.replace('_', '-')} must be a finite number >= 0, got "
-                                 f"{v!r}")
     try:
         k = {"lower": 1, "upper": 2}.get(args.fold) or int(args.fold)
     except ValueError:
@@ -125,9 +115,14 @@ def snap_on_file(args) -> int:
 
 
 def _check_before_work(args) -> None:
-    """The options that would fail only after the simulation, checked first: the time step
-    against the simulated time, and the animation's writer (.gif: Pillow; anything else:
+    """The options that would fail only after the simulation, checked first: the damping,
+    the time step against the simulated time, and the animation's writer (.gif: Pillow; anything else:
     ffmpeg, which must be on the PATH)."""
+    for name in ("damping", "kelvin_voigt"):
+        v = getattr(args, name)
+        if v < 0 or not math.isfinite(v):
+            raise ParameterError(f"{name.replace('_', '-')} must be a finite number >= 0, got "
+                                 f"{v!r}")
     for name in ("t_end", "dt"):
         v = getattr(args, name)
         if not (math.isfinite(v) and v > 0):
