@@ -65,10 +65,9 @@ def cmd_snap(args) -> int:
             d += (f" ({out['duration_s']:.4g} s)" if out["duration_s"] is not None else "") \
                 + f"; transit {out['transit_s']:.4g} s in {args.medium} (drag " \
                 f"{args.damping:.3g})"
-        print(f"snap from the {args.fold} fold (alpha* = {out['fold_alpha_deg']:.8f} deg, "
-              f"magnet at {out['alpha_deg']:.8f} deg): duration {d}, tip "
-              f"{fold.tip_angle_deg:.4f} -> {s.rest_tip_deg:.4f} deg, peak tip speed "
-              f"{s.peak_tip_speed:.4g} deg per unit time, overshoot {s.overshoot_deg:.4g} deg")
+        print(_summary(f"snap from the {args.fold} fold (alpha* = "
+                       f"{out['fold_alpha_deg']:.8f} deg, magnet at {out['alpha_deg']:.8f} "
+                       "deg)", d, fold, s))
     return 0 if s.trajectory.converged else 1
 
 
@@ -107,17 +106,21 @@ def snap_on_file(args) -> int:
         print(json.dumps(out))
     else:
         d = "not settled by t_end" if s.duration is None else f"{s.duration:.6g}"
-        print(f"{args.rig}: snap from fold {k} ({args.vary} = {out['fold_value']:.10g}, moved "
-              f"to {out['value']:.10g}): duration {d}, tip {fold.tip_angle_deg:.4f} -> "
-              f"{s.rest_tip_deg:.4f} deg, peak tip speed {s.peak_tip_speed:.4g} deg per unit "
-              f"time, overshoot {s.overshoot_deg:.4g} deg")
+        print(_summary(f"{args.rig}: snap from fold {k} ({args.vary} = "
+                       f"{out['fold_value']:.10g}, moved to {out['value']:.10g})", d, fold, s))
     return 0 if s.trajectory.converged else 1
+
+
+def _summary(head: str, duration: str, fold, s) -> str:
+    return (f"{head}: duration {duration}, tip {fold.tip_angle_deg:.4f} -> "
+            f"{s.rest_tip_deg:.4f} deg, peak tip speed {s.peak_tip_speed:.4g} deg per unit "
+            f"time, overshoot {s.overshoot_deg:.4g} deg")
 
 
 def _check_before_work(args) -> None:
     """The options that would fail only after the simulation, checked first: the damping,
-    the time step against the simulated time, and the animation's writer (.gif: Pillow; anything else:
-    ffmpeg, which must be on the PATH)."""
+    the time step against the simulated time, and the animation's writer (.gif: Pillow;
+    anything else: ffmpeg, which must be on the PATH)."""
     for name in ("damping", "kelvin_voigt"):
         v = getattr(args, name)
         if v < 0 or not math.isfinite(v):
