@@ -145,6 +145,9 @@ TABLE = [
     # options that fail only after the work, checked first
     (["snap", *PAPER, "--animate", "snap.avi"], "animate"),
     (["snap", *PAPER, "--dt", "100"], "dt"),
+    (["sweep", *PAPER, "--rate", "1e9", "--from", "38", "--to", "41"], "rate"),
+    (["sweep", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg", "--from", "90",
+      "--to", "240", "--rate", "1e9"], "rate"),
     (["branch", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg", "--from", "90",
       "--to", "120", "--modes", "1000"], "modes"),
 ]

@@ -101,16 +101,20 @@ def test_every_branch_point_along_a_range_is_its_own(name, support, vary, start,
     assert all(abs(p.unfolding) <= 1e-10 for p in points)
 
 
-def test_cli_branch_lists_the_branch_points_inside_its_range():
+def test_cli_branch_lists_the_branch_points_inside_its_range(tmp_path):
     """jaxrod branch on the shipped hard-magnetic cantilever, opposed field from 3 to 6 mT:
     the one branch point inside is the second Euler load, 9 pi^2 / 4 (lambda = 4000 B); the
-    first (0.617 mT) lies outside the range and is not listed."""
+    first (0.617 mT) lies outside the range and is not listed. With --out: branch.csv,
+    branch.json and the figure branch.png."""
     from jaxrod.cli import main
 
     with contextlib.redirect_stdout(io.StringIO()) as out:
         code = main(["branch", "hard-magnetic-cantilever", "--vary", "field.0.B", "--from",
-                     "3e-3", "--to", "6e-3", "--set", "field.0.angle_deg=180", "--json"])
+                     "3e-3", "--to", "6e-3", "--set", "field.0.angle_deg=180", "--json",
+                     "--out", str(tmp_path)])
     assert code == 0
+    assert all((tmp_path / f"branch.{ext}").stat().st_size > 0 for ext in ("csv", "json",
+                                                                             "png"))
     result = json.loads(out.getvalue())
     (bp,) = result["branch_points"]
     assert abs(bp["value"] - 9 * math.pi**2 / 4 / 4000.0) <= 1e-13

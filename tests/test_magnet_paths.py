@@ -13,6 +13,7 @@ import pytest
 import jaxrod as jr
 from jaxrod.cli import main
 from jaxrod.scenes.files import load
+from jaxrod.scenes.terms import Zeeman
 from jaxrod.status import SolverError, Status
 
 #: A magnet on a horizontal rail at height 0.8 rod lengths: it enters the reach (|c| = 1)
@@ -72,3 +73,15 @@ def test_a_magnet_within_reach_at_the_start_is_refused(rail):
     file = load(rail)
     with pytest.raises(jr.ParameterError, match="field0.along"):
         jr.branch(file.scene, "field0.along", 2.2, 4.0, n=12)
+
+
+def test_an_equilibrium_whose_ramp_stopped_short_is_not_converged(monkeypatch):
+    """The load ramp cut short (a ramp of 3 points: capacity full before full load), Newton
+    then polished from where it stopped: the status says NOT_CONVERGED, and ``converged``
+    agrees (it said True beside that status, and the command line exited 0)."""
+    from jaxrod.equilibria import equilibrium as module
+
+    monkeypatch.setattr(module, "RAMP_CAPACITY", 3)
+    scene = jr.Scene({"bending": jr.Bending(), "field": Zeeman(5.0, 1.0)})
+    eq = jr.equilibrium(scene, n=7, throw=False)  # a degree no other test traces
+    assert eq.status == Status.NOT_CONVERGED and eq.converged is False

@@ -32,6 +32,7 @@ def rate_sweep_command(args) -> int:
     if not (math.isfinite(args.rate) and args.rate > 0):
         raise ParameterError(f"rate must be a finite number > 0 (deg per unit time), got "
                              f"{args.rate!r}")
+    _check_sweep_time(a, b, args.rate)
     if not (math.isfinite(args.damping) and args.damping >= 0):
         raise ParameterError(f"damping must be a finite number >= 0, got {args.damping!r}")
     scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(args.G),
@@ -82,13 +83,17 @@ def sweep_on_file(args) -> int:
     a, b = args.start_deg, args.stop_deg
     if a == b:
         raise ParameterError(f"to: must differ from --from ({a:g})")
-    at = file.scene.replace(key, factor * a)
-    start = jr.equilibrium(at, n=args.n or 16, throw=False)
+    if args.rate is not None:
+        if not (math.isfinite(args.rate) and args.rate > 0):
+            raise ParameterError(f"rate must be a finite number > 0, got {args.rate!r}")
+        _check_sweep_time(a, b, args.rate)
     out_dir = None
     if args.out is not None:
         from jaxrod.cli._output import _output_dir
 
         out_dir = _output_dir(args.out)
+    at = file.scene.replace(key, factor * a)
+    start = jr.equilibrium(at, n=args.n or 16, throw=False)
     if args.rate is None:
         from jaxrod.progress import Interrupted
 
@@ -109,8 +114,6 @@ def sweep_on_file(args) -> int:
         if out_dir is not None:
             write_scene_sweep(out_dir, s, factor, args)
     else:
-        if not (math.isfinite(args.rate) and args.rate > 0):
-            raise ParameterError(f"rate must be a finite number > 0, got {args.rate!r}")
         s = rate_sweep(at, key, start.state, factor * b, factor * args.rate, args.damping,
                        dt=args.dt, n=args.n or 16, tol=_tol(args))
         switches = [v / factor for v in s.switches]
@@ -127,6 +130,22 @@ def sweep_on_file(args) -> int:
           + ": snapped at " + (", ".join(f"{v:.8g}" for v in switches) or "no value")
           + ("\n" + _describe(predicted, "") if args.rate is not None else ""))
     return 0 if converged else 1
+
+
+#: The shortest sweep, in time units L^2 sqrt(rho A_c / (E I)): the clamped rod's slowest
+#: vibration period is 2 pi / 3.516 = 1.8, so a sweep a thousand times shorter is a jump
+#: (the rod cannot follow; its response is the snap's: ``jaxrod snap``).
+SHORTEST_SWEEP = 1e-3
+
+
+def _check_sweep_time(a, b, rate) -> None:
+    """A rate that moves the input over its range faster than the rod can respond is
+    refused before any work (the sweep would be a jump, its lag meaningless)."""
+    if abs(b - a) / rate < SHORTEST_SWEEP:
+        raise ParameterError(f"rate: {rate:g} per unit time crosses the range in "
+                             f"{abs(b - a) / rate:.3g} time units, a thousandth of the rod's "
+                             f"slowest vibration period (1.8): a jump, not a sweep; give a "
+                             f"rate below {abs(b - a) / SHORTEST_SWEEP:g}, or use jaxrod snap")
 
 
 def write_scene_sweep(out_dir, s, factor, args) -> None:
