@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import jaxrod as jr
-from jaxrod.bistability.fold_map import read_fold_map
+from jaxrod.bistability.fold_map import FoldMap, read_fold_map
 from jaxrod.scenes.terms import Bending, Dipole, Gravity, Zeeman
 
 N = 10
@@ -116,3 +116,26 @@ def test_four_devices_give_the_map_of_one(in_memory):
     np.testing.assert_array_equal(got["status"], in_memory.status)
     for name in ("first", "second"):
         np.testing.assert_allclose(got[name], getattr(in_memory, name), rtol=0, atol=1e-11)
+
+
+def test_the_maps_figure_shows_the_first_fold_and_names_the_failed_points():
+    """FoldMap.plot: the colour is the first fold's value (the count was shown before), a
+    failed point is marked and named in the legend with how many failed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    first = np.array([[0.5, 0.6], [0.7, np.nan]])
+    status = np.array([[0, 0], [0, int(jr.Status.NOT_CONVERGED)]], dtype=np.int16)
+    m = FoldMap("magnet.alpha", (0.0, 1.0), "magnet.D", np.array([1.1, 1.2]), "magnet.M",
+                   np.array([0.02, 0.03]), np.array([[2, 2], [1, -1]]), first,
+                   np.full((2, 2), np.nan), status)
+    fig, ax = plt.subplots()
+    m.plot(ax, factor=math.pi / 180.0, label="first fold (deg)")
+    mesh = ax.collections[0]
+    np.testing.assert_allclose(mesh.get_array().compressed(), np.degrees(first.ravel()[:3]))
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(t.startswith("failed (1 of 4") for t in labels)
+    assert fig.axes[-1].get_ylabel() == "first fold (deg)"
+    plt.close(fig)

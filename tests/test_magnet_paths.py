@@ -85,3 +85,13 @@ def test_an_equilibrium_whose_ramp_stopped_short_is_not_converged(monkeypatch):
     scene = jr.Scene({"bending": jr.Bending(), "field": Zeeman(5.0, 1.0)})
     eq = jr.equilibrium(scene, n=7, throw=False)  # a degree no other test traces
     assert eq.status == Status.NOT_CONVERGED and eq.converged is False
+
+
+def test_a_range_the_branch_cannot_cover_says_so():
+    """jaxrod folds RIG --to 1e9: the branch stops at its capacity far short of the range's
+    end; it printed the folds it met and exited 0. Now: exit 1, status capacity_full, and
+    where it ended."""
+    code, out = _run(["folds", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg",
+                      "--from", "90", "--to", "1e9", "--json"])
+    assert code == 1 and out["converged"] is False
+    assert out["status"] == "capacity_full" and out["last_value"] < 1e9
