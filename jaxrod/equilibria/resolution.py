@@ -11,7 +11,11 @@ from __future__ import annotations
 import dataclasses
 
 from jaxrod.discretise.tail import tail_estimate
+from jaxrod.equilibria.branch import branch
+from jaxrod.equilibria.branch_points import refine_branch_points
 from jaxrod.equilibria.equilibrium import DEFAULT_N, Equilibrium, discretise, equilibrium
+from jaxrod.equilibria.folds import refine
+from jaxrod.equilibria.record import Branch
 from jaxrod.scenes.scene import Scene
 from jaxrod.status import Status
 
@@ -52,9 +56,7 @@ def resolved_equilibrium(scene: Scene, n: int = DEFAULT_N, n_max: int = DEGREES[
     for d in degrees:
         eq = equilibrium(scene, d, throw=False)
         error = tail_estimate(discretise(scene, d), eq.state)
-        if not eq.converged:
-            return ResolvedEquilibrium(eq, d, error, eq.status)
-        if error <= tol:
+        if not eq.converged or error <= tol:  # a failure says so itself
             return ResolvedEquilibrium(eq, d, error, eq.status)
     return ResolvedEquilibrium(eq, d, error, Status.UNDER_RESOLVED)
 
@@ -65,7 +67,7 @@ class ResolvedBranch:
     that resolves them (or the largest tried); ``error_estimate``: the largest tail of the
     branch's states and its points' (radians); ``resolved``: at most ``TOLERANCE``."""
 
-    branch: object
+    branch: Branch
     folds: list
     branch_points: list
     n: int
@@ -79,10 +81,6 @@ def resolved_branch(scene: Scene, vary: str, start: float, stop: float, n: int =
     """The branch of ``scene`` along ``vary`` from ``start`` to ``stop`` with its folds (and,
     with ``points``, its branch points), N raised through ``DEGREES`` from ``n`` until the
     largest tail of the branch's states and its special points' is at most ``tol``."""
-    from jaxrod.equilibria.branch import branch
-    from jaxrod.equilibria.branch_points import refine_branch_points
-    from jaxrod.equilibria.folds import refine
-
     degrees = [n] + [d for d in DEGREES if n < d <= n_max]
     for d in degrees:
         b = branch(scene, vary, start, stop, d, margins=margins)
