@@ -215,12 +215,12 @@ def retry_size(k: int) -> int:
 
 
 def padded(arrays, size: int | None = None, multiple: int = 1):
-    """The 1-D arrays padded to ``size`` (default ``bucket``) rounded up to a multiple of
-    ``multiple`` (the devices a batch is split over) by repeating their first entry (a valid
-    parameter set; the padding's answers are dropped)."""
+    """The arrays padded along their first axis to ``size`` (default ``bucket``) rounded up
+    to a multiple of ``multiple`` (the devices a batch is split over) by repeating their
+    first entry (a valid parameter set; the padding's answers are dropped)."""
     k = arrays[0].shape[0]
     size = bucket(k) if size is None else size
     size = -(-size // multiple) * multiple
     if size == k:
         return list(arrays)
-    return [np.concatenate([a, np.repeat(a[:1], size - k)]) for a in arrays]
+    return [np.concatenate([a, np.repeat(a[:1], size - k, axis=0)]) for a in arrays]

@@ -105,3 +105,21 @@ def test_out_of_plane_rows_of_another_count_compile_nothing():
     np.testing.assert_allclose(rows["min_eig_perp"][:5], first["min_eig_perp"], rtol=1e-12)
     one = out_of_plane(theta[6], alpha[6], scene, disc)  # the last row, on its own
     np.testing.assert_allclose(rows["min_eig_perp"][6], one["min_eig_perp"], rtol=1e-10)
+
+
+def test_a_second_key_of_the_same_scene_compiles_nothing():
+    """One program per scene structure and N (the varied key is a traced path through the
+    scene's inputs, ``jaxrod.scenes.path``): after the folds along one key, the folds along
+    two others (one fold and none: other counts than the first's two) compile nothing."""
+    import math
+
+    import jaxrod as jr
+    from jaxrod.equilibria.folds import folds
+
+    scene = jr.DipoleMagnet(2.2, 0.0236, 1.2228, 0.0).scene
+    assert len(folds(scene, "magnet.alpha", 0.0, 0.5 * math.pi, n=12)) == 2
+    with compilations() as c:
+        other = folds(scene, "magnet.M", 0.0236, 0.06, n=12, throw=False)
+        none = folds(scene, "gravity.G", 2.2, 2.0, n=12)
+    assert none == [] and len(other) != 2
+    assert c[0] == 0

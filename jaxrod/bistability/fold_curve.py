@@ -16,13 +16,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.derivatives import Structured
-from jaxrod.equilibria.branch import check_range
+from jaxrod.equilibria.branch import MODEL, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, tip
 from jaxrod.equilibria.folds import Fold, folds
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
-from jaxrod.scenes.scene import Input, Scene
+from jaxrod.scenes.files import FileScene
+from jaxrod.scenes.path import ALONG
+from jaxrod.scenes.path import along as along_path
+from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.fold_curve import FoldCurveOptions, event_solve, fold_curve_run, split
 from jaxrod.status import Status
 
@@ -31,14 +33,15 @@ CAPACITY = 400
 
 @dataclasses.dataclass(frozen=True)
 class Second:
-    """``args_at`` of the fold-curve solver: the second input on its scaled coordinate, with
-    args = (scene, disc, origin, span, origin2, span2)."""
-
-    key: str
+    """``args_at`` of the fold-curve solver: the path's second parameter on its scaled
+    coordinate, with args = (path, disc, origin, span, origin2, span2)."""
 
     def __call__(self, u, args):
-        scene, disc, origin, span, origin2, span2 = args
-        return scene.replace(self.key, origin2 + span2 * u), disc, origin, span
+        path, disc, origin, span, origin2, span2 = args
+        return path, disc, origin, span, jnp.reshape(origin2 + span2 * u, (1,))
+
+
+SECOND = Second()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -102,41 +105,31 @@ class FoldCurve:
         return ax
 
 
-def _curve_program(w0, directions, scene, disc, origin, span, origin2, span2, opts, capacity,
-                   vary, along):
-    model = Structured(Input(vary))
-    args = (scene, disc, origin, span, origin2, span2)
-    second = Second(along)
-    runs = jax.vmap(lambda d: fold_curve_run(model, second, w0, args, opts, capacity, d))(
+def _tip_at(w, m, args):
+    x, _, lam, u = split(w, m)
+    return tip(ALONG(lam, SECOND(u, args))[0], x, args[1])[0]
+
+
+def _curve_program(w0, directions, path, disc, origin, span, origin2, span2, opts, capacity):
+    args = (path, disc, origin, span, origin2, span2)
+    runs = jax.vmap(lambda d: fold_curve_run(MODEL, SECOND, w0, args, opts, capacity, d))(
         directions)
-    m = disc.size
-
-    def observe(w):
-        x, _, lam, u = split(w, m)
-        at = scene.replace(along, origin2 + span2 * u).replace(vary, origin + span * lam)
-        return tip(at, x, disc)[0]
-
-    return runs, jax.vmap(jax.vmap(observe))(runs.w)
+    return runs, jax.vmap(jax.vmap(lambda w: _tip_at(w, disc.size, args)))(runs.w)
 
 
-_program = jit(_curve_program, static_argnames=("capacity", "vary", "along"))
+_program = jit(_curve_program, static_argnames=("capacity",))
 
 
-def _cusp_program(w0, scene, disc, origin, span, origin2, span2, vary, along):
-    model = Structured(Input(vary))
-    args = (scene, disc, origin, span, origin2, span2)
-    res = event_solve(model, Second(along), w0, args)
-    m = disc.size
-    x, _, lam, u = split(res.x, m)
-    at = scene.replace(along, origin2 + span2 * u).replace(vary, origin + span * lam)
-    return res, tip(at, x, disc)[0]
+def _cusp_program(w0, path, disc, origin, span, origin2, span2):
+    args = (path, disc, origin, span, origin2, span2)
+    res = event_solve(MODEL, SECOND, w0, args)
+    return res, _tip_at(res.x, disc.size, args)
 
 
-_cusps = jit(jax.vmap(_cusp_program, in_axes=(0, None, None, None, None, None, None, None,
-                                               None)), static_argnames=("vary", "along"))
+_cusps = jit(jax.vmap(_cusp_program, in_axes=(0, None, None, None, None, None, None)))
 
 
-def fold_curve(scene: Scene, vary: str, vary_range: tuple[float, float], along: str,
+def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float], along: str,
                along_range: tuple[float, float], which: int = 0, n: int = DEFAULT_N,
                ds_max: float = 0.02) -> FoldCurve:
     """The fold curve through the ``which``-th fold met along ``vary`` (over ``vary_range``,
@@ -149,7 +142,8 @@ def fold_curve(scene: Scene, vary: str, vary_range: tuple[float, float], along: 
     a0, a1 = check_range(scene, along, *along_range)
     if along == vary:
         raise ParameterError(f"along must differ from vary ({vary})")
-    u_now = float(scene.value(along))
+    path = along_path(scene, (vary, along))
+    u_now = float(path.value(along))
     if not min(a0, a1) <= u_now <= max(a0, a1):
         raise ParameterError(f"the scene's {along} = {u_now:g} is outside along_range "
                              f"[{min(a0, a1):g}, {max(a0, a1):g}]")
@@ -159,7 +153,7 @@ def fold_curve(scene: Scene, vary: str, vary_range: tuple[float, float], along: 
                              f"{len(found)} fold(s); which = {which} asks for fold "
                              f"{which + 1}")
     f = found[which]
-    disc = discretise(scene, n)
+    disc = discretise(path.template, n)
     lo, hi = min(start, stop), max(start, stop)
     origin, span = lo, hi - lo
     origin2, span2 = min(a0, a1), abs(a1 - a0)
@@ -167,8 +161,8 @@ def fold_curve(scene: Scene, vary: str, vary_range: tuple[float, float], along: 
                           jnp.array([(f.value - origin) / span, (u_now - origin2) / span2])])
     opts = FoldCurveOptions(ds=0.01, ds_max=ds_max, u_min=0.0, u_max=1.0, lam_min=0.0,
                             lam_max=1.0)
-    runs, angle = jax.device_get(_program(w0, jnp.array([-1.0, 1.0]), scene, disc, origin,
-                                          span, origin2, span2, opts, CAPACITY, vary, along))
+    runs, angle = jax.device_get(_program(w0, jnp.array([-1.0, 1.0]), path, disc, origin,
+                                          span, origin2, span2, opts, CAPACITY))
     m = disc.size
     parts, status = [], []
     for i, rev in ((0, True), (1, False)):
@@ -188,8 +182,8 @@ def fold_curve(scene: Scene, vary: str, vary_range: tuple[float, float], along: 
     # each cusp refined from the bracket's point with the smaller |F_qq|
     test = curve.cusp_test
     pick = np.where(np.abs(test[idx]) <= np.abs(test[idx + 1]), idx, idx + 1)
-    res, angles = jax.device_get(_cusps(jnp.asarray(cat[4][pick]), scene, disc, origin, span,
-                                        origin2, span2, vary, along))
+    res, angles = jax.device_get(_cusps(jnp.asarray(cat[4][pick]), path, disc, origin, span,
+                                        origin2, span2))
     cusps = []
     for i, j in enumerate(idx):
         x, _, lam, u = split(res.x[i], m)

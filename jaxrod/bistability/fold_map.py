@@ -22,13 +22,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.bistability.grid_store import GridAxis, GridStore, Variable, read
-from jaxrod.derivatives import Structured
-from jaxrod.equilibria.branch import check_range
+from jaxrod.equilibria.branch import MODEL, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, ramp
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit, padded
 from jaxrod.progress import Interrupted, interrupt_requested, progress_bar
-from jaxrod.scenes.scene import Input, Scene
+from jaxrod.scenes.files import FileScene
+from jaxrod.scenes.path import ALONG, along
+from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.continuation import REACHED_BOUND, ContinuationOptions, continuation_run
 from jaxrod.solvers.folds import moore_spence_solve
 from jaxrod.status import Status
@@ -96,11 +97,10 @@ class FoldMap:
         return ax
 
 
-def _point(xv, yv, scene, disc, origin, span, vary, x_key, y_key):
-    sc = scene.replace(x_key, xv).replace(y_key, yv)
-    model = Structured(Input(vary))
-    args = (sc, disc, origin, span)
-    x0, ok0, *_ = ramp(sc.replace(vary, origin), disc)
+def _point(xv, yv, path, disc, origin, span):
+    model = MODEL
+    args = (path, disc, origin, span, jnp.stack([xv, yv]))
+    x0, ok0, *_ = ramp(ALONG(0.0, args)[0], disc)
     run = continuation_run(model, x0, 0.0, args, OPTIONS, CAPACITY, 1.0, spectrum=False)
     t = run.tangent_lam
     valid = jnp.arange(CAPACITY - 1) < run.num_points - 1
@@ -130,33 +130,32 @@ def _point(xv, yv, scene, disc, origin, span, vary, x_key, y_key):
     return count, values[0], values[1], status
 
 
-def _chunk_program(X, Y, scene, disc, origin, span, vary, x_key, y_key):
-    return jax.vmap(lambda a, b: _point(a, b, scene, disc, origin, span, vary, x_key,
-                                        y_key))(X, Y)
+def _chunk_program(X, Y, path, disc, origin, span):
+    return jax.vmap(lambda a, b: _point(a, b, path, disc, origin, span))(X, Y)
 
 
 @functools.lru_cache(maxsize=16)
-def _per_device(devices: tuple, vary: str, x_key: str, y_key: str):
+def _per_device(devices: tuple):
     """The chunk's program as one independent program per device (``jax.shard_map`` over a
     one-axis mesh of the points; the scene and the range replicated): each device runs its
     own continuations to its own slowest point, with no collective in the loops."""
     mesh = jax.sharding.Mesh(np.asarray(devices), ("points",))
     points, same = jax.sharding.PartitionSpec("points"), jax.sharding.PartitionSpec()
-    fn = functools.partial(_chunk_program, vary=vary, x_key=x_key, y_key=y_key)
-    return jit(jax.shard_map(fn, mesh=mesh, in_specs=(points, points, same, same, same, same),
+    return jit(jax.shard_map(_chunk_program, mesh=mesh,
+                             in_specs=(points, points, same, same, same, same),
                              out_specs=points, check_vma=False)), mesh
 
 
-def _solve_chunk(X, Y, scene, disc, start, span, vary, x_key, y_key, devices, chunk):
+def _solve_chunk(X, Y, path, disc, start, span, devices, chunk):
     """(count, first, second, status) at the points (X, Y) of one chunk, padded to the
     chunk's size (one compiled shape for the edge chunks too) rounded up to a multiple of the
     devices, and laid out over them."""
-    program, mesh = _per_device(tuple(devices), vary, x_key, y_key)
+    program, mesh = _per_device(tuple(devices))
     k = X.size
     X, Y = padded([X, Y], chunk * chunk, multiple=mesh.size)
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("points"))
     got = jax.device_get(program(jax.device_put(X, sharding), jax.device_put(Y, sharding),
-                                 scene, disc, start, span))
+                                 path, disc, start, span))
     return [np.asarray(g)[:k] for g in got]
 
 
@@ -170,7 +169,7 @@ VARIABLES = {
 }
 
 
-def fold_map(scene: Scene, vary: str, vary_range: tuple[float, float],
+def fold_map(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float],
              x: tuple[str, np.ndarray], y: tuple[str, np.ndarray], n: int = DEFAULT_N,
              progress: bool = True, out=None, chunk: int = 8, devices=None,
              units: dict | None = None) -> FoldMap:
@@ -188,9 +187,9 @@ def fold_map(scene: Scene, vary: str, vary_range: tuple[float, float],
     start, stop = check_range(scene, vary, *vary_range)
     (x_key, xs), (y_key, ys) = x, y
     for key in (x_key, y_key):
-        scene.check_key(key)
         if key == vary:
             raise ParameterError(f"the map's axes must differ from vary ({vary})")
+    path = along(scene, (vary, x_key, y_key))
     xs, ys = np.asarray(xs, float).ravel(), np.asarray(ys, float).ravel()
     if xs.size < 2 or ys.size < 2 or xs.size * ys.size > MAX_POINTS:
         raise ParameterError(f"a map needs 2 to {MAX_POINTS} points with at least 2 per axis, "
@@ -199,7 +198,7 @@ def fold_map(scene: Scene, vary: str, vary_range: tuple[float, float],
         raise ParameterError("the map's axis values must be finite")
     if not 2 <= chunk <= 1000:
         raise ParameterError(f"chunk must be in [2, 1000], got {chunk}")
-    disc = discretise(scene, n)
+    disc = discretise(path.template, n)
     devices = list(devices or jax.local_devices())
     units = units or {}
     store = GridStore(out, VARIABLES, GridAxis(x_key, tuple(xs), units.get(x_key, "1")),
@@ -216,8 +215,8 @@ def fold_map(scene: Scene, vary: str, vary_range: tuple[float, float],
     def solve(iy, ix):
         rows, cols = store.rows_and_columns(iy, ix)
         shape = X[rows, cols].shape
-        got = _solve_chunk(X[rows, cols].ravel(), Y[rows, cols].ravel(), scene, disc, start,
-                           stop - start, vary, x_key, y_key, devices, chunk)
+        got = _solve_chunk(X[rows, cols].ravel(), Y[rows, cols].ravel(), path, disc, start,
+                           stop - start, devices, chunk)
         for g, part in zip(grid, got):
             g[rows, cols] = part.reshape(shape)
         return {name: part.reshape(shape) for name, part in zip(VARIABLES, got)}

@@ -79,7 +79,6 @@ def sweep_on_file(args) -> int:
     if args.vary is None or args.start_deg is None or args.stop_deg is None:
         raise ParameterError("vary: give --vary KEY --from A --to B with a scene file")
     file = load(args.rig, args.set)
-    key, factor = file.input_of(args.vary)
     a, b = args.start_deg, args.stop_deg
     if a == b:
         raise ParameterError(f"to: must differ from --from ({a:g})")
@@ -92,7 +91,9 @@ def sweep_on_file(args) -> int:
         from jaxrod.cli._output import _output_dir
 
         out_dir = _output_dir(args.out)
-    at = file.scene.replace(key, factor * a)
+    from jaxrod.scenes.path import along
+
+    at = along(file, (args.vary,)).at_host(a)
     start = jr.equilibrium(at, n=args.n or 16, throw=False)
     if args.rate is None:
         from jaxrod.progress import Interrupted
@@ -100,20 +101,22 @@ def sweep_on_file(args) -> int:
         step = args.step or abs(b - a) / 200.0
         values = np.linspace(a, b, max(2, int(round(abs(b - a) / step)) + 1))
         try:
-            s = jr.scene_sweep(file.scene, key, (factor * values).tolist(), n=args.n or 16,
+            s = jr.scene_sweep(file, args.vary, values.tolist(), n=args.n or 16,
                                state=start.state, progress=not args.quiet)
         except Interrupted as stop:
             if out_dir is not None:
-                write_scene_sweep(out_dir, stop.partial, factor, args)
+                write_scene_sweep(out_dir, stop.partial, 1.0, args)
             print(f"jaxrod sweep: {stop.partial.reason}" + (
                 f"; wrote what was computed to {out_dir / 'sweep.csv'} (marked incomplete)"
                 if out_dir is not None else ""), file=sys.stderr)
             return 130
-        switches = [snap["value"] / factor for snap in s.snaps]
+        switches = [snap["value"] for snap in s.snaps]
         converged = s.converged
         if out_dir is not None:
-            write_scene_sweep(out_dir, s, factor, args)
-    else:
+            write_scene_sweep(out_dir, s, 1.0, args)
+    else:  # the motion: an input of the scene, moved at its rate
+        key, factor = file.input_of(args.vary)
+        at = file.scene.replace(key, factor * a)
         s = rate_sweep(at, key, start.state, factor * b, factor * args.rate, args.damping,
                        dt=args.dt, n=args.n or 16, tol=_tol(args))
         switches = [v / factor for v in s.switches]

@@ -21,8 +21,10 @@ def _axis(text: str, what: str, file):
         a, b, count = float(rest[0]), float(rest[1]), int(rest[2])
     except ValueError:
         raise ParameterError(f"{what}: write KEY:START:STOP:COUNT, got {text!r}") from None
-    scene_key, factor = file.input_of(key, what)
-    return key, scene_key, factor, np.linspace(a, b, count)
+    from jaxrod.scenes.path import along
+
+    along(file, (key,))
+    return key, key, 1.0, np.linspace(a, b, count)
 
 
 def foldcurve_on_file(args) -> int:
@@ -35,9 +37,11 @@ def foldcurve_on_file(args) -> int:
     key, start, stop, factor = _range(args, file)
     if args.along is None or args.along_to is None:
         raise ParameterError("along: give --along KEY --along-to VALUE with a scene file")
-    along, a_factor = file.input_of(args.along, "along")
-    a0 = float(np.asarray(file.scene.value(along)))
-    curve = jr.fold_curve(file.scene, key, (start, stop), along, (a0, a_factor * args.along_to),
+    from jaxrod.scenes.path import along
+
+    a_factor = 1.0
+    a0 = along(file, (args.along,)).start[0]
+    curve = jr.fold_curve(file, key, (start, stop), args.along, (a0, args.along_to),
                           which=args.which, n=args.n)
     cusps = [{**c.as_dict(), "along": c.along_value / a_factor, "value": c.value / factor}
              for c in curve.cusps]
@@ -105,7 +109,7 @@ def map_on_file(args) -> int:
     out_dir = _output_dir(args.out)
     store = out_dir / "map.zarr"
     try:
-        jr.fold_map(file.scene, key, (start, stop), (xs_key, xf * xs), (ys_key, yf * ys),
+        jr.fold_map(file, key, (start, stop), (xs_key, xf * xs), (ys_key, yf * ys),
                     n=args.n, progress=not args.quiet, out=store, chunk=args.chunk or 8)
     except KeyboardInterrupt:
         print(f"jaxrod map: interrupted; the finished chunks are kept in {store} (run the "

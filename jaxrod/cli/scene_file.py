@@ -27,8 +27,8 @@ def add_scene_file_inputs(p, vary: bool, to: bool = True, vary_name: str = "--va
                    "field.0.angle_deg=120); repeatable")
     if vary:
         if to:
-            p.add_argument(vary_name, metavar="KEY", help="the scene file's input to vary "
-                           "(dotted key, e.g. field.0.angle_deg)")
+            p.add_argument(vary_name, metavar="KEY", help="the scene file's number to vary "
+                           "(dotted key, e.g. field.0.angle_deg or rod.youngs_modulus)")
             p.add_argument("--to", dest="stop", type=_float("to"), default=None,
                            help="its last value")
         p.add_argument("--from", dest="start", type=_float("from"), default=None,
@@ -64,10 +64,12 @@ def _range(args, file):
         args.stop = args.to
     if args.vary is None or args.start is None or args.stop is None:
         raise ParameterError("vary: give --vary KEY --from A --to B with a scene file")
-    key, factor = file.input_of(args.vary)
+    from jaxrod.scenes.path import along
+
+    along(file, (args.vary,))  # any number of the file (its units), named if it is not one
     if args.start == args.stop:
         raise ParameterError(f"to: must differ from --from ({args.start:g})")
-    return key, factor * args.start, factor * args.stop, factor
+    return args.vary, args.start, args.stop, 1.0
 
 
 def _at(eq_tip_deg, X, file) -> dict:
@@ -115,7 +117,7 @@ def branch_on_file(args) -> int:
     key, start, stop, factor = _range(args, file)
     from jaxrod.equilibria.resolution import resolved_branch
 
-    r = resolved_branch(file.scene, key, start, stop, n=args.n, margins=file.margins)
+    r = resolved_branch(file, key, start, stop, n=args.n)
     b, folds, points = r.branch, r.folds, r.branch_points
     values = np.asarray(b.value) / factor
     out = {"vary": args.vary, "points": len(values),
@@ -132,7 +134,7 @@ def branch_on_file(args) -> int:
     if getattr(args, "modes", 0):  # the vibration modes as rows of the branch
         from jaxrod.dynamics.modes import modes_along
 
-        w2 = modes_along(file.scene, b, n=r.n, count=args.modes)
+        w2 = modes_along(file, b, n=r.n, count=args.modes)
         out["omega_squared"] = w2.tolist()
     if args.out:
         from jaxrod.cli._output import _output_dir
@@ -224,8 +226,7 @@ def folds_on_file(args) -> int:
 
     file = _load(args)
     key, start, stop, factor = _range(args, file)
-    r = resolved_branch(file.scene, key, start, stop, n=args.n, margins=file.margins,
-                        points=False)
+    r = resolved_branch(file, key, start, stop, n=args.n, points=False)
     out = {"vary": args.vary, "folds": [_fold(f, factor, file) for f in r.folds],
            **_path_status(r, factor)}
     if args.json:

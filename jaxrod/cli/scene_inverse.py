@@ -93,7 +93,7 @@ def fit_on_file(args) -> int:
                              "the order met along --vary; nan for one not measured)")
     keys, free, bounds = _free_and_bounds(args, file)
     sigma = 1.0 if args.sigma is None else args.sigma
-    fit = fit_folds(file.scene, key, (start, stop), [factor * v for v in args.folds],
+    fit = fit_folds(file, key, (start, stop), [factor * v for v in args.folds],
                     [s for s, _ in free], sigma * abs(factor), bounds, n=args.n)
     return _report(args, file, keys, free, fit, factor, "fit")
 
@@ -109,6 +109,6 @@ def design_on_file(args) -> int:
         raise ParameterError("targets: give the folds' target values (--targets V1 V2 ..., "
                              "in the order met along --path)")
     keys, free, bounds = _free_and_bounds(args, file)
-    fit = design_folds(file.scene, key, (start, stop), [factor * v for v in args.targets],
+    fit = design_folds(file, key, (start, stop), [factor * v for v in args.targets],
                        [s for s, _ in free], bounds, n=args.n)
     return _report(args, file, keys, free, fit, factor, "design")

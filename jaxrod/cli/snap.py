@@ -88,20 +88,20 @@ def snap_on_file(args) -> int:
         raise ParameterError(f"fold: a number K >= 1 (the K-th fold met), got {args.fold!r}")
     file = _load(args)
     key, start, stop, factor = _range(args, file)
-    folds = jr.scene_folds(file.scene, key, start, stop, n=args.n, margins=file.margins)
+    folds = jr.scene_folds(file, key, start, stop, n=args.n)
     if len(folds) < k:
         raise ParameterError(f"fold: the path along {args.vary} from {args.start:g} to "
                              f"{args.stop:g} meets {len(folds)} fold(s); --fold {k} asks for "
                              f"fold {k}")
     fold = folds[k - 1]
-    s = snap(file.scene, fold, args.damping, t_end=args.t_end, dt=args.dt, n=args.n,
+    s = snap(file, fold, args.damping, t_end=args.t_end, dt=args.dt, n=args.n,
              kelvin_voigt=args.kelvin_voigt, scheme=args.scheme)
     out = {"rig": args.rig, "set": args.set, "vary": args.vary, "fold": k,
            "fold_value": fold.value / factor, "value": s.value / factor,
            "damping": args.damping, "kelvin_voigt": args.kelvin_voigt, **s.as_dict(),
            "units": "time in L^2 sqrt(rho A_c / (E I)); angles in degrees"}
     out["value"] = s.value / factor
-    _write_outputs(args, file.scene, s, out, fold.vary)
+    _write_outputs(args, file, s, out, fold.vary)
     if args.json:
         print(json.dumps(out))
     else:
@@ -213,8 +213,9 @@ def _write_outputs(args, scene, s, out, vary: str) -> None:
                            + ([f"{tr.time[k] * scale:.10g}"] if scale else []))
     if args.plot or args.animate:
         from jaxrod.dynamics import figures
+        from jaxrod.scenes.path import along
 
-        at = scene.replace(vary, s.value)
+        at = along(scene, (vary,)).at_host(s.value)
         if args.plot:
             figures.snap_figure(s, time_scale=scale).savefig(args.plot, dpi=150)
         if args.animate:

@@ -37,7 +37,7 @@ def _extrapolate(q, qm, qmm, h, h1, h2):
     return l0 * q + l1 * qm + l2 * qmm
 
 
-def _run(scene, disc, q0, p0, t_end, dt, h_max, tol, max_steps, c, vary, start, rate):
+def _run(path, disc, q0, p0, t_end, dt, h_max, tol, max_steps, c, start, rate):
     size = q0.shape[0]
     z = jnp.zeros(max_steps)
     buffers = (z, jnp.zeros((max_steps, size)), z, z, z, z, jnp.zeros((max_steps, 3)),
@@ -51,7 +51,7 @@ def _run(scene, disc, q0, p0, t_end, dt, h_max, tol, max_steps, c, vary, start, 
         t, h, k, tries, hist, bufs = carry
         q, qm, qmm, p, pm, h1, h2 = hist
         h = jnp.minimum(jnp.minimum(h, h_max), t_end - t)
-        at = scene_at(scene, vary, start, rate, t + h)
+        at = scene_at(path, start, rate, t + h)
         ratio = jnp.where(k == 0, 0.0, h / h1)
         guess = jnp.where(k == 0, q, q + ratio * (q - qm))
         res, v1, p1 = bdf_step(at, disc, q, qm, p, pm, h, ratio, c, guess)
@@ -78,4 +78,4 @@ def _run(scene, disc, q0, p0, t_end, dt, h_max, tol, max_steps, c, vary, start, 
     return t, k, bufs
 
 
-run_adaptive = jit(_run, static_argnames=("max_steps", "vary"))
+run_adaptive = jit(_run, static_argnames=("max_steps",))

@@ -113,17 +113,17 @@ def discrete_gradient_step(scene_mid, disc, q, p, h, c, guess):
                         lambda: newton(_residual, guess, args, tol=1e-12))
 
 
-def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate):
+def _run(path, disc, q0, p0, h, steps, c, start, rate):
     m = q0.shape[0]
 
     def step(carry, k):
         x, x_prev = carry
         t_mid = (k + 0.5) * h
-        at = scene_at(scene, vary, start, rate, t_mid)
+        at = scene_at(path, start, rate, t_mid)
         guess = jnp.where(k == 0, x, 2.0 * x - x_prev)
         res = discrete_gradient_step(at, disc, x[:m], x[m:], h, c, guess)
         q1, p1 = res.x[:m], res.x[m:]
-        end = scene_at(scene, vary, start, rate, t_mid + 0.5 * h)
+        end = scene_at(path, start, rate, t_mid + 0.5 * h)
         H1, v1 = hamiltonian(end, disc, q1, p1)
         kin = 0.5 * jnp.dot(p1, v1)
         angle, X = tip(end, q1, disc)
@@ -136,4 +136,4 @@ def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate):
     return out
 
 
-run_discrete_gradient = jit(_run, static_argnames=("steps", "vary"))
+run_discrete_gradient = jit(_run, static_argnames=("steps",))

@@ -38,6 +38,7 @@ from jaxrod.dynamics.modes import positions
 from jaxrod.equilibria.equilibrium import DEFAULT_N, FIXED, discretise, tip, tip_tangent
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
+from jaxrod.scenes.path import scene_path, still_path
 from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.newton import newton
 
@@ -79,13 +80,13 @@ def _momentum(q0, q1, h, c, scene_mid, disc):
         + _drag(q0, q1, c, scene_mid, disc)
 
 
-def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate):
+def _run(path, disc, q0, p0, h, steps, c, start, rate):
     W = disc.quad_weights[:, None]
 
     def step(carry, k):
         q, q_prev, p = carry
         t_mid = (k + 0.5) * h
-        at = scene_at(scene, vary, start, rate, t_mid)
+        at = scene_at(path, start, rate, t_mid)
         guess = 2.0 * q - q_prev
         res = newton(_step_residual, guess, (q, p, h, c, at, disc), tol=1e-12)
         q1 = res.x
@@ -93,7 +94,7 @@ def _run(scene, disc, q0, p0, h, steps, c, vary, start, rate):
         dr = positions(at, q1, disc) - positions(at, q, disc)
         kinetic = 0.5 * jnp.sum(W * dr**2) / h**2
         potential = FIXED.energy(0.5 * (q + q1), 0.0, (at, disc))
-        end = scene_at(scene, vary, start, rate, t_mid + 0.5 * h)
+        end = scene_at(path, start, rate, t_mid + 0.5 * h)
         angle, X = tip(end, q1, disc)
         out = (q1, kinetic, potential, angle, tip_tangent(end, q1, disc), X, res.converged,
                res.residual_norm)
@@ -144,10 +145,10 @@ def observe(scene1, disc, q1, v1):
             tip_tangent(scene1, q1, disc), X)
 
 
-def _run_bdf(scene, disc, q0, p0, h, steps, c, vary, start, rate):
+def _run_bdf(path, disc, q0, p0, h, steps, c, start, rate):
     def step(carry, k):
         q, qm, p, pm = carry
-        at = scene_at(scene, vary, start, rate, (k + 1.0) * h)
+        at = scene_at(path, start, rate, (k + 1.0) * h)
         first = k == 0
         guess = jnp.where(first, q, 2.0 * q - qm)
         res, v1, p1 = bdf_step(at, disc, q, qm, p, pm, h, jnp.where(first, 0.0, 1.0), c,
@@ -159,8 +160,8 @@ def _run_bdf(scene, disc, q0, p0, h, steps, c, vary, start, rate):
     return out
 
 
-_program = jit(_run, static_argnames=("steps", "vary"))
-_program_bdf = jit(_run_bdf, static_argnames=("steps", "vary"))
+_program = jit(_run, static_argnames=("steps",))
+_program_bdf = jit(_run_bdf, static_argnames=("steps",))
 SCHEMES = ("midpoint", "bdf2", "discrete-gradient")
 
 
@@ -226,10 +227,8 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
     # no Kelvin-Voigt damping: None, so that its terms are not compiled in
     c = (float(damping), float(kelvin_voigt) if kelvin_voigt > 0 else None)
     steps = int(np.ceil(t_end / dt - 1e-9))  # t_end / dt may round up past an integer
-    start = 0.0
-    if vary is not None:
-        scene.check_key(vary)
-        start = float(np.asarray(scene.value(vary)))
+    path = still_path(scene) if vary is None else scene_path(scene, (vary,))
+    start = 0.0 if vary is None else path.start[0]
     if velocity is None:
         p0 = jnp.zeros_like(q0)
     else:  # p0 = M(q0) v0, the Legendre transform at the start
@@ -237,13 +236,13 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
 
         p0 = mass_matrix(scene, q0, disc) @ jnp.asarray(velocity, jnp.float64)
     if tol is not None:
-        return _adaptive(scene, disc, q0, p0, t_end, dt, c, vary, start, rate, scheme, tol,
+        return _adaptive(path, disc, q0, p0, t_end, dt, c, start, rate, scheme, tol,
                          dt_max, max_steps)
     program = {"midpoint": _program, "bdf2": _program_bdf}.get(scheme)
     if program is None:
         from jaxrod.dynamics.discrete_gradient import run_discrete_gradient as program
     q, kin, pot, angle, tangent, X, conv, res = jax.device_get(program(
-        scene, disc, q0, p0, float(dt), steps, c, vary, start, float(rate)))
+        path, disc, q0, p0, float(dt), steps, c, start, float(rate)))
     return Trajectory(time=dt * np.arange(1, steps + 1), states=np.asarray(q),
                       tip_angle_deg=np.degrees(angle), tip_tangent_deg=np.degrees(tangent),
                       tip_position=np.asarray(X), kinetic=np.asarray(kin),
@@ -251,7 +250,7 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
                       residual_norm=float(np.max(res)))
 
 
-def _adaptive(scene, disc, q0, p0, t_end, dt, c, vary, start, rate, scheme, tol, dt_max,
+def _adaptive(path, disc, q0, p0, t_end, dt, c, start, rate, scheme, tol, dt_max,
               max_steps):
     from jaxrod.dynamics.adaptive import run_adaptive
 
@@ -265,8 +264,8 @@ def _adaptive(scene, disc, q0, p0, t_end, dt, c, vary, start, rate, scheme, tol,
     if not (isinstance(max_steps, int) and max_steps >= 3):
         raise ParameterError(f"max_steps must be an integer >= 3, got {max_steps!r}")
     t, k, bufs = jax.device_get(run_adaptive(
-        scene, disc, q0, p0, float(t_end), float(dt), float(dt_max), float(tol), max_steps, c,
-        vary, start, float(rate)))
+        path, disc, q0, p0, float(t_end), float(dt), float(dt_max), float(tol), max_steps, c,
+        start, float(rate)))
     time, q, kin, pot, angle, tangent, X, conv, res = (np.asarray(b)[:int(k)] for b in bufs)
     reached = float(t) >= float(t_end) * (1.0 - 1e-12)
     return Trajectory(time=time, states=q, tip_angle_deg=np.degrees(angle),

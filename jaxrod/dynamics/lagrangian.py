@@ -14,9 +14,10 @@ import jax.numpy as jnp
 from jaxrod.dynamics.modes import positions
 
 
-def scene_at(scene, vary, start, rate, t):
-    """The scene with ``vary`` at start + rate t (unchanged when ``vary`` is None)."""
-    return scene if vary is None else scene.replace(vary, start + rate * t)
+def scene_at(path, start, rate, t):
+    """The scene on ``path`` (``jaxrod.scenes.path``) at the value start + rate t of its
+    parameter (a path that moves nothing: the scene as it is)."""
+    return path.at(jnp.reshape(start + rate * t, (1,)))
 
 
 def kinetic(scene, disc, q, v):

@@ -29,6 +29,7 @@ import numpy as np
 from jaxrod.equilibria.equilibrium import DEFAULT_N, FIXED, discretise, equilibrium
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
+from jaxrod.scenes.path import along
 from jaxrod.scenes.scene import Scene
 from jaxrod.status import Status
 
@@ -170,25 +171,25 @@ def resolved_modes(scene: Scene, count: int, n: int = DEFAULT_N, straight: bool 
         coarse, n = w2, min(n_max, n + max(8, n // 3))
 
 
-@jit(static_argnames=("vary", "count"))
-def _along(scene, disc, states, values, vary, count):
-    return jax.vmap(lambda x, v: _modes(scene.replace(vary, v), disc, x)[0][:count])(
-        states, values)
+@jit(static_argnames=("count",))
+def _along(path, disc, states, values, count):
+    return jax.vmap(lambda x, v: _modes(path.at(v), disc, x)[0][:count])(states, values)
 
 
 def modes_along(scene: Scene, branch, n: int = DEFAULT_N, count: int = 3) -> np.ndarray:
     """omega^2 of the lowest ``count`` modes at every point of a branch of ``scene``
     (``jr.branch``; its states are of degree ``n``), shape (points, count): the modes as a
     row of the branch. At a fold the lowest omega^2 crosses zero (the snap's soft mode)."""
-    disc = discretise(scene, n)
+    path = along(scene, (branch.vary,))
+    disc = discretise(path.template, n)
     if branch.theta.shape[1] != disc.size:
         raise ParameterError(f"the branch's states are not of degree {n}")
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) \
             or not 1 <= count <= resolvable(n):
         raise ParameterError(f"modes: degree {n} resolves the lowest 1 to {resolvable(n)} "
                              f"modes (raise N for more), got {count!r}")
-    return np.asarray(_along(scene, disc, jnp.asarray(branch.theta),
-                             jnp.asarray(branch.value), branch.vary, count))
+    return np.asarray(_along(path, disc, jnp.asarray(branch.theta),
+                             jnp.asarray(branch.value), count))
 
 
 def in_hertz(omega, length: float, radius: float, youngs_modulus: float,

@@ -42,6 +42,7 @@ from jaxrod.dynamics.integrate import Trajectory, _run_bdf, simulate
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, equilibrium, tip
 from jaxrod.equilibria.folds import Fold
 from jaxrod.params import ParameterError
+from jaxrod.scenes.path import along, still_path
 from jaxrod.scenes.scene import Input, Scene
 from jaxrod.solvers.folds import differentiable_fold
 
@@ -96,7 +97,7 @@ def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: floa
     # past the fold: to the side where the branch has no equilibrium next to the fold
     side = -1.0 if fold.normal_form_c > 0 else 1.0
     value = fold.value + side * past
-    at = scene.replace(fold.vary, value)
+    at = along(scene, (fold.vary,)).at_host(value)
     if scheme is None:
         scheme = "bdf2" if damping + kelvin_voigt > 0 else "discrete-gradient"
     tr = simulate(at, fold.state, t_end, dt, damping=damping, n=n, scheme=scheme,
@@ -164,7 +165,8 @@ def duration_of(scene: Scene, fold: Fold, damping, t_end: float = 60.0, dt: floa
     x, value = z[:m], fold.value + z[-1]
     at = scene.replace(fold.vary, value + side * past)
     start = jnp.degrees(tip(scene.replace(fold.vary, value), x, disc)[0])
-    out = _run_bdf(at, disc, x, jnp.zeros(m), dt, steps, (damping, None), None, 0.0, 0.0)
+    out = _run_bdf(still_path(at), disc, x, jnp.zeros(m), dt, steps, (damping, None), 0.0,
+                   0.0)
     angle, converged = jnp.degrees(out[3]), out[-2]
     time = dt * jnp.arange(0, steps + 1)
     angle = jnp.concatenate([start[None], angle])

@@ -27,7 +27,10 @@ from jaxrod.equilibria.equilibrium import (
 from jaxrod.equilibria.record import Branch, branch_from_runs, first_points
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
-from jaxrod.scenes.scene import Input, Scene
+from jaxrod.scenes.checks import check_scene, rebuild
+from jaxrod.scenes.files import FileScene
+from jaxrod.scenes.path import ALONG, Path, along
+from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.status import Status
 
@@ -38,9 +41,10 @@ def branch_options(max_points: int = 400) -> ContinuationOptions:
                                tol=1e-12, max_points=max_points)
 
 
-def check_range(scene: Scene, vary: str, start, stop) -> tuple[float, float]:
-    """(start, stop) as floats, after checking that ``vary`` names a scalar input."""
-    scene.check_key(vary)
+def check_range(scene, vary: str, start, stop) -> tuple[float, float]:
+    """(start, stop) as floats, after checking that ``vary`` names an input of the scene (or
+    a number of the rig)."""
+    along(scene, (vary,))
     start, stop = float(start), float(stop)
     if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
         raise ParameterError(f"the range of {vary} must be two different finite values, got "
@@ -48,24 +52,36 @@ def check_range(scene: Scene, vary: str, start, stop) -> tuple[float, float]:
     return start, stop
 
 
+def path_of(scene, vary: str, start: float, stop: float, margins: dict | None = None):
+    """(path along ``vary``, the magnets' radii by term name): the inputs checked at both
+    ends of the range (``jaxrod.scenes.checks``; a rig's numbers by building it there)."""
+    path = along(scene, (vary,))
+    if margins is None:
+        margins = getattr(scene, "margins", None)
+    for v in (start, stop):
+        at = margins if isinstance(scene, Scene) else rebuild(scene, vary, v).margins
+        check_scene(path.at_host(v), at, where=f"{vary} = {v:g}")
+    return path, margins
+
+
 #: Samples of a magnet's path over a range (then bisection to the value where it enters).
 PATH_SAMPLES = 1025
 
 
-def reach_along(scene: Scene, vary: str, start: float, stop: float,
-                margins: dict | None = None) -> float | None:
-    """The first value of ``vary`` between ``start`` and ``stop`` at which a magnet enters
-    the rod's reach (``Scene.clearance`` reaches zero), or None if the whole path stays
-    clear. Only an input of a magnet's term moves a magnet; its path is sampled at
-    ``PATH_SAMPLES`` values and the entry refined by bisection to round-off.
+def reach_along(path: Path, start: float, stop: float, margins: dict | None = None
+                ) -> float | None:
+    """The first value of the path's parameter between ``start`` and ``stop`` at which a
+    magnet enters the rod's reach (``Scene.clearance`` reaches zero), or None if the whole
+    path stays clear. Only a path that moves a magnet's term can bring it in; its path is
+    sampled at ``PATH_SAMPLES`` values and the entry refined by bisection to round-off.
     ParameterError if a magnet is within reach at ``start`` itself."""
-    if scene.replace(vary, start).clearance(margins) <= 0.0:
+    vary = path.keys[0] if path.keys else "the input"
+    if path.at_host(start).clearance(margins) <= 0.0:
         raise ParameterError(f"{vary}: at {start:g} a magnet is within the rod's reach (its "
                              "centre must lie farther from the clamp than the rod's length)")
-    term = vary.split(".")[0]
-    if not hasattr(scene.terms.get(term), "centre"):
+    if not any(hasattr(path.template.terms[t], "centre") for t in path.moved_terms()):
         return None
-    gap = lambda v: scene.replace(vary, v).clearance(margins)
+    gap = lambda v: path.at_host(v).clearance(margins)
     values = np.linspace(start, stop, PATH_SAMPLES)
     gaps = np.array([gap(v) for v in values])
     inside = np.nonzero(gaps <= 0.0)[0]
@@ -80,33 +96,40 @@ def reach_along(scene: Scene, vary: str, start: float, stop: float,
     return float(lo)
 
 
-def _observed(scene, disc, x, lam, origin, span, vary):
-    at = scene.replace(vary, origin + span * lam)
+#: The equilibria's model along a path (``jaxrod.scenes.path``): one for every key.
+MODEL = Structured(ALONG)
+NO_REST = np.zeros(0)
+
+
+def observe(path, disc, x, lam, origin, span, rest=NO_REST):
+    """(q, tip angle, energy, tip position) at a point (x, lam) of a branch (traceable)."""
+    args = (path, disc, origin, span, rest)
+    at, _ = ALONG(lam, args)
     angle, X = tip(at, x, disc)
-    energy = Structured(Input(vary)).energy(x, lam, (scene, disc, origin, span))
-    return mean_functional(disc)(x), angle, energy, X
+    return mean_functional(disc)(x), angle, MODEL.energy(x, lam, args), X
 
 
-def _branch_program(scene, disc, origin, span, x0, given, opts, capacity, vary):
-    at_start = scene.replace(vary, origin)
-    x_ramp, *_ = ramp(at_start, disc)
-    model = Structured(Input(vary))
-    args = (scene, disc, origin, span)
+def _branch_program(path, disc, origin, span, x0, given, opts, capacity):
+    x_ramp, *_ = ramp(path.at(jnp.reshape(origin, (1,))), disc)
+    args = (path, disc, origin, span, NO_REST)
     start = jnp.where(given, x0, x_ramp)
-    start = solve_at(model, start, 0.0, args).x
-    run = continuation_run(model, start, 0.0, args, opts, capacity, 1.0)
+    start = solve_at(MODEL, start, 0.0, args).x
+    run = continuation_run(MODEL, start, 0.0, args, opts, capacity, 1.0)
     q, angle, energy, X = jax.vmap(
-        lambda x, lam: _observed(scene, disc, x, lam, origin, span, vary))(run.x, run.lam)
+        lambda x, lam: observe(path, disc, x, lam, origin, span))(run.x, run.lam)
     return run, (q, angle, energy), X
 
 
-_program = jit(_branch_program, static_argnames=("capacity", "vary"))
+_program = jit(_branch_program, static_argnames=("capacity",))
 
 
-def branch(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
+def branch(scene: Scene | FileScene, vary: str, start: float, stop: float,
+           n: int = DEFAULT_N,
            state=None, options: ContinuationOptions | None = None,
            margins: dict | None = None) -> Branch:
-    """The equilibria of ``scene`` as the input ``vary`` goes from ``start`` to ``stop``.
+    """The equilibria of ``scene`` (a ``Scene``, or a rig from ``jaxrod.load_scene``) as the
+    input ``vary`` goes from ``start`` to ``stop`` (for a rig, any of its numbers, in the
+    file's units: ``rod.youngs_modulus``, ``rod.length``; ``jaxrod.scenes.path``).
 
     Equilibria solve grad E(x; v) = 0 (the discrete Euler-Lagrange equations); stability is
     the Hessian's inertia (``Branch.stable``). The branch starts from the equilibrium at
@@ -117,15 +140,16 @@ def branch(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_
     ``MAGNET_IN_REACH`` (``complete`` False).
     """
     start, stop = check_range(scene, vary, start, stop)
-    entry = reach_along(scene, vary, start, stop, margins)
+    path, margins = path_of(scene, vary, start, stop, margins)
+    entry = reach_along(path, start, stop, margins)
     end = stop if entry is None else entry
-    disc = discretise(scene, n)
+    disc = discretise(path.template, n)
     opts = options or branch_options()
     given = state is not None
     x0 = jnp.asarray(state if given else np.zeros(disc.size), jnp.float64)
     run, observed, X = jax.device_get(_program(
-        scene, disc, start, end - start, x0, given, opts._replace(max_points=0),
-        opts.max_points, vary))
+        path, disc, start, end - start, x0, given, opts._replace(max_points=0),
+        opts.max_points))
     # lam -> the input's value, and the tangent's lam component in the input's units
     run = run._replace(lam=start + (end - start) * run.lam,
                        tangent_lam=(end - start) * run.tangent_lam)

@@ -30,15 +30,23 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.derivatives import Structured
 from jaxrod.discretise.tail import tail_estimate
-from jaxrod.equilibria.branch import _observed, branch, branch_options, check_range
+from jaxrod.equilibria.branch import (
+    MODEL,
+    NO_REST,
+    branch,
+    branch_options,
+    check_range,
+    observe,
+    path_of,
+)
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
 from jaxrod.equilibria.folds import _span
 from jaxrod.equilibria.record import Branch, SpecialPoint, branch_from_runs, checked
 from jaxrod.params import ParameterError
-from jaxrod.programs import jit
-from jaxrod.scenes.scene import Input, Scene
+from jaxrod.programs import bucket, jit, padded
+from jaxrod.scenes.path import ALONG, along
+from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.continuation import continuation_run
 from jaxrod.solvers.newton import newton
 from jaxrod.status import SolverError, Status
@@ -71,13 +79,13 @@ def _bp_residual(z, args):
                                                               jnp.dot(phi, F_lam)])])
 
 
-def _refine_one(x_a, lam_a, x_b, lam_b, k, scene, disc, origin, span, vary):
+def _refine_one(x_a, lam_a, x_b, lam_b, k, path, disc, origin, span):
     """Moore's system from the bracket (a, b) of a Morse index change k -> k + 1 (or back):
     the start is the secant zero of the k-th eigenvalue (ascending, the one that crosses)
     between a and b, phi its eigenvector there, so that the refinement meets this crossing
     and not the kernel of an earlier one (whose eigenvalue is negative here)."""
-    model = Structured(Input(vary))
-    margs = (scene, disc, origin, span)
+    model = MODEL
+    margs = (path, disc, origin, span, NO_REST)
     mu_a = jnp.linalg.eigvalsh(model.hessian(x_a, lam_a, margs))[k]
     mu_b = jnp.linalg.eigvalsh(model.hessian(x_b, lam_b, margs))[k]
     t = jnp.clip(jnp.where(mu_a != mu_b, mu_a / (mu_a - mu_b), 0.5), 0.0, 1.0)
@@ -94,12 +102,11 @@ def _refine_one(x_a, lam_a, x_b, lam_b, k, scene, disc, origin, span, vary):
     own = jnp.abs(eig[k]) < jnp.min(others)
     scale = mean_functional(disc)(phi)
     phi = jnp.where(jnp.abs(scale) > 1e-8, phi / scale, phi)
-    angle, X = tip(scene.replace(vary, origin + span * lam), x, disc)
+    angle, X = tip(ALONG(lam, margs)[0], x, disc)
     return res, own, (x, phi, lam, res.x[2 * m + 1], angle, X)
 
 
-_refine = jit(jax.vmap(_refine_one, in_axes=(0, 0, 0, 0, 0, None, None, None, None, None)),
-              static_argnames=("vary",))
+_refine = jit(jax.vmap(_refine_one, in_axes=(0, 0, 0, 0, 0, None, None, None, None)))
 
 
 def refine_branch_points(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[BranchPoint]:
@@ -115,13 +122,16 @@ def refine_branch_points(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Br
     idx = stability_changes(b)
     if len(idx) == 0:
         return []
-    disc = discretise(scene, n)
+    path = along(scene, (b.vary,))
+    disc = discretise(path.template, n)
     origin, span = float(b.value[0]), _span(b)
     k = np.minimum(b.morse_index[idx], b.morse_index[idx + 1]).astype(np.int32)
     lam = (b.value - origin) / span
+    # padded to a bucket of points: one program for every count
+    brackets = padded([np.asarray(b.theta[idx]), lam[idx], np.asarray(b.theta[idx + 1]),
+                       lam[idx + 1], k], bucket(max(len(idx), 2)))
     res, own, (x, phi, lam_star, mu, angle, X) = jax.device_get(_refine(
-        jnp.asarray(b.theta[idx]), jnp.asarray(lam[idx]), jnp.asarray(b.theta[idx + 1]),
-        jnp.asarray(lam[idx + 1]), jnp.asarray(k), scene, disc, origin, span, b.vary))
+        *(jnp.asarray(a) for a in brackets), path, disc, origin, span))
     points = []
     for i, j in enumerate(idx):
         lo, hi = sorted((float(lam[j]), float(lam[j + 1])))
@@ -166,9 +176,9 @@ def _switch_jacobian(y, args):
     return jnp.vstack([top, jnp.append(phi / jnp.dot(phi, phi), 0.0)[None, :]])
 
 
-def _bifurcated_program(scene, disc, origin, span, x_star, phi, eps, opts, capacity, vary):
-    model = Structured(Input(vary))
-    margs = (scene, disc, origin, span)
+def _bifurcated_program(path, disc, origin, span, x_star, phi, eps, opts, capacity):
+    model = MODEL
+    margs = (path, disc, origin, span, NO_REST)
     y0 = jnp.append(x_star + eps * phi, 0.0)
     start = newton(_switch_residual, y0, (model, margs, x_star, phi, eps), tol=1e-12,
                    jacobian=_switch_jacobian)
@@ -178,11 +188,11 @@ def _bifurcated_program(scene, disc, origin, span, x_star, phi, eps, opts, capac
     direction = jnp.where(lam1 >= 0.0, 1.0, -1.0)
     run = continuation_run(model, x1, lam1, margs, opts, capacity, direction)
     q, angle, energy, X = jax.vmap(
-        lambda x, lam: _observed(scene, disc, x, lam, origin, span, vary))(run.x, run.lam)
+        lambda x, lam: observe(path, disc, x, lam, origin, span))(run.x, run.lam)
     return run, (q, angle, energy), X, start.converged
 
 
-_bifurcated = jit(_bifurcated_program, static_argnames=("capacity", "vary"))
+_bifurcated = jit(_bifurcated_program, static_argnames=("capacity",))
 
 
 def bifurcated_branch(scene: Scene, point: BranchPoint, stop: float, n: int = DEFAULT_N,
@@ -194,14 +204,15 @@ def bifurcated_branch(scene: Scene, point: BranchPoint, stop: float, n: int = DE
     if side not in (1, -1):
         raise ParameterError(f"side must be +1 or -1, got {side!r}")
     start, stop = check_range(scene, point.vary, point.value, stop)
-    disc = discretise(scene, n)
+    path, _ = path_of(scene, point.vary, start, stop)
+    disc = discretise(path.template, n)
     opts = branch_options()
     # lam in [0, 1] spans the point's value to stop; the run may start on either side
     opts = opts._replace(lam_min=-1.0, lam_max=1.0, max_points=0)
     phi = jnp.asarray(point.null_vector)
     run, observed, X, ok = jax.device_get(_bifurcated(
-        scene, disc, start, stop - start, jnp.asarray(point.state), phi, side * amplitude,
-        opts, 400, point.vary))
+        path, disc, start, stop - start, jnp.asarray(point.state), phi, side * amplitude,
+        opts, 400))
     if not bool(ok):
         raise SolverError(Status.NOT_CONVERGED, f"the first point of the branch bifurcating "
                           f"at {point.vary} = {point.value:.6g}")

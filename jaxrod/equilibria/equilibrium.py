@@ -24,6 +24,8 @@ from jaxrod.discretise.director import director_discretisation
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import check_degree
 from jaxrod.programs import jit
+from jaxrod.scenes.checks import check_scene
+from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.scene import Input, Scene
 from jaxrod.solvers.continuation import (
     FOLDS_FOUND,
@@ -51,8 +53,10 @@ RAMP_CAPACITY = 200
 
 
 def discretise(scene: Scene, n: int):
-    """The discretisation of degree n for the scene's geometry and support."""
+    """The discretisation of degree n for the scene's geometry and support (a ``Scene`` or a
+    rig read from a file)."""
     n = check_degree(n)
+    scene = getattr(scene, "scene", scene)
     if scene.geometry == "planar":
         return planar_discretisation(n, scene.support)
     return director_discretisation(n, scene.support)
@@ -185,14 +189,21 @@ def _continued(scene, disc, x0):
         _report(scene, disc, res.x)
 
 
-def equilibrium(scene: Scene, n: int = DEFAULT_N, state=None, throw: bool = True) -> Equilibrium:
-    """The equilibrium of ``scene`` reached by ramping its loads from zero, or continued from
-    ``state`` (a state of the same discretisation) when given.
+def equilibrium(scene: Scene | FileScene, n: int = DEFAULT_N, state=None,
+                throw: bool = True) -> Equilibrium:
+    """The equilibrium of ``scene`` (a ``Scene`` or a rig from ``jaxrod.load_scene``) reached
+    by ramping its loads from zero, or continued from ``state`` (a state of the same
+    discretisation) when given.
 
     Solves grad E(x) = 0 (the discrete Euler-Lagrange equations of the scene's energy,
-    ``jaxrod.scenes.scene``). ``throw``: raise ``SolverError`` if it does not converge
-    (else the status says so).
+    ``jaxrod.scenes.scene``). The inputs are checked first (``jaxrod.scenes.checks``: a
+    non-finite input or a magnet within the rod's reach is a ``ParameterError`` naming
+    it). ``throw``: raise ``SolverError`` if it does not converge (else the status says so).
     """
+    margins = None
+    if isinstance(scene, FileScene):
+        scene, margins = scene.scene, scene.margins
+    check_scene(scene, margins)
     disc = discretise(scene, n)
     if state is None:
         (x, conv, res, it, status), rep = jax.device_get(_ramped(scene, disc))

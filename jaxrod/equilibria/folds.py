@@ -21,13 +21,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.derivatives import Structured
 from jaxrod.discretise.tail import tail_estimate
-from jaxrod.equilibria.branch import branch, check_range
+from jaxrod.equilibria.branch import MODEL, NO_REST, branch, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
 from jaxrod.equilibria.record import Branch, SpecialPoint, checked
-from jaxrod.programs import jit
-from jaxrod.scenes.scene import Input, Scene
+from jaxrod.programs import bucket, jit, padded
+from jaxrod.scenes.files import FileScene
+from jaxrod.scenes.path import ALONG, along
+from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.folds import fold_coefficients, moore_spence_solve
 from jaxrod.status import SolverError, Status
 
@@ -45,35 +46,36 @@ class Fold(SpecialPoint):
     normal_form_c: float
 
 
-def _refine_one(x0, lam0, scene, disc, origin, span, vary):
-    model = Structured(Input(vary))
-    args = (scene, disc, origin, span)
-    phi0 = jnp.linalg.eigh(model.hessian(x0, lam0, args))[1][:, 0]
-    fp = moore_spence_solve(model, x0, lam0, phi0, args)
+def _refine_one(x0, lam0, path, disc, origin, span):
+    args = (path, disc, origin, span, NO_REST)
+    phi0 = jnp.linalg.eigh(MODEL.hessian(x0, lam0, args))[1][:, 0]
+    fp = moore_spence_solve(MODEL, x0, lam0, phi0, args)
     d_lam, d_qq, phi_q = fold_coefficients(None, fp.x, fp.lam, fp.null_vector, args,
                                            mean_functional(disc), jacobian=fp.newton.jacobian)
-    angle, X = tip(scene.replace(vary, origin + span * fp.lam), fp.x, disc)
+    angle, X = tip(ALONG(fp.lam, args)[0], fp.x, disc)
     return fp, (d_lam / span, d_qq, mean_functional(disc)(fp.x), angle, X, phi_q)
 
 
-_refine = jit(jax.vmap(_refine_one, in_axes=(0, 0, None, None, None, None, None)),
-              static_argnames=("vary",))
+_refine = jit(jax.vmap(_refine_one, in_axes=(0, 0, None, None, None, None)))
 
 
-def refine(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Fold]:
+def refine(scene: Scene | FileScene, b: Branch, n: int = DEFAULT_N) -> list[Fold]:
     """The folds detected on the branch ``b`` of ``scene``, refined (in the order met)."""
     idx = b.fold_indices
     if len(idx) == 0:
         return []
-    disc = discretise(scene, n)
+    path = along(scene, (b.vary,))
+    disc = discretise(path.template, n)
     origin = float(b.value[0])
     # start from the point of the pair with the smaller |dv/ds| (nearer the fold)
     pick = np.where(np.abs(b.tangent_value[idx]) <= np.abs(b.tangent_value[idx + 1]), idx,
                     idx + 1)
     span = _span(b)
     lam0 = (b.value[pick] - origin) / span
-    fp, rep = jax.device_get(_refine(jnp.asarray(b.theta[pick]), jnp.asarray(lam0), scene,
-                                     disc, origin, span, b.vary))
+    # padded to a bucket of folds: one program for every count
+    x0, lam0 = padded([np.asarray(b.theta[pick]), np.asarray(lam0)], bucket(max(len(pick), 2)))
+    fp, rep = jax.device_get(_refine(jnp.asarray(x0), jnp.asarray(lam0), path, disc, origin,
+                                     span))
     # a refinement that left the branch's range (by a tenth of it) found another fold, or
     # none: not converged
     lo, hi = float(np.nanmin(b.value)), float(np.nanmax(b.value))
@@ -99,7 +101,7 @@ def _span(b: Branch) -> float:
     return span if span > 0 else 1.0
 
 
-def folds(scene: Scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
+def folds(scene: Scene | FileScene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
           state=None, throw: bool = True, margins: dict | None = None) -> list[Fold]:
     """The folds met along the branch of ``scene`` as ``vary`` goes from ``start`` to
     ``stop`` (in the order met), each refined by Moore-Spence with its normal form.

@@ -18,12 +18,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.derivatives import Structured
+from jaxrod.equilibria.branch import MODEL, NO_REST, path_of
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, equilibrium, solve_at, tip
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.progress import Interrupted, interrupt_requested, progress_bar
-from jaxrod.scenes.scene import Input, Scene
+from jaxrod.scenes.files import FileScene
+from jaxrod.scenes.path import ALONG
+from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.descent import descend
 
 #: Values per compiled chunk.
@@ -57,15 +59,14 @@ def follow_path(model, x0, lams, args):
     return jax.lax.scan(step, x0, lams)
 
 
-def _chunk_program(x0, values, scene, disc, vary):
-    model = Structured(Input(vary))
-    args = (scene, disc, 0.0, 1.0)
-    end, (xs, snapped, ok) = follow_path(model, x0, values, args)
-    observed = jax.vmap(lambda x, v: tip(scene.replace(vary, v), x, disc))(xs, values)
+def _chunk_program(x0, values, path, disc):
+    args = (path, disc, 0.0, 1.0, NO_REST)
+    end, (xs, snapped, ok) = follow_path(MODEL, x0, values, args)
+    observed = jax.vmap(lambda x, v: tip(ALONG(v, args)[0], x, disc))(xs, values)
     return end, xs, snapped, ok, observed
 
 
-_chunk = jit(_chunk_program, static_argnames=("vary",))
+_chunk = jit(_chunk_program)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -97,7 +98,7 @@ class Sweep:
                 for i in np.nonzero(self.snapped)[0]]
 
 
-def sweep(scene: Scene, vary: str, values, n: int = DEFAULT_N, state=None,
+def sweep(scene: Scene | FileScene, vary: str, values, n: int = DEFAULT_N, state=None,
           progress: bool = True) -> Sweep:
     """Move the input ``vary`` of ``scene`` through ``values`` quasi-statically (module
     docstring), from the equilibrium at the first value reached by ramping the loads from
@@ -106,12 +107,12 @@ def sweep(scene: Scene, vary: str, values, n: int = DEFAULT_N, state=None,
 
     Paper: the experiment's protocol (eq. ``intro-hysteresis``), for any scene and input.
     """
-    scene.check_key(vary)
     values = np.asarray(values, float).ravel()
     if values.size < 2 or not np.all(np.isfinite(values)):
         raise ParameterError(f"values of {vary}: at least two finite values, got {values.size}")
-    disc = discretise(scene, n)
-    start = equilibrium(scene.replace(vary, float(values[0])), n, state=state)
+    path, _ = path_of(scene, vary, float(values.min()), float(values.max()))
+    disc = discretise(path.template, n)
+    start = equilibrium(path.at_host(float(values[0])), n, state=state)
     x = jnp.asarray(start.state)
     parts = []
     bar = progress_bar(values.size, "sweep", unit="value", enabled=progress)
@@ -127,7 +128,7 @@ def sweep(scene: Scene, vary: str, values, n: int = DEFAULT_N, state=None,
         chunk = values[lo:lo + CHUNK]
         padded = np.pad(chunk, (0, CHUNK - chunk.size), mode="edge")
         _, xs, snapped, ok, (angle, X) = jax.device_get(
-            _chunk(x, jnp.asarray(padded), scene, disc, vary))
+            _chunk(x, jnp.asarray(padded), path, disc))
         k = chunk.size
         # the state after the last real value (padding repeats it: the same state)
         x = jnp.asarray(xs[k - 1])

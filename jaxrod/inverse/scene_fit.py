@@ -26,13 +26,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.derivatives import Structured
-from jaxrod.equilibria.branch import check_range
+from jaxrod.equilibria.branch import MODEL, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise
 from jaxrod.equilibria.folds import folds as scene_folds
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
-from jaxrod.scenes.scene import Input, Scene
+from jaxrod.scenes.files import FileScene
+from jaxrod.scenes.path import along
+from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.folds import differentiable_fold
 from jaxrod.solvers.least_squares import forward_mode, least_squares_run
 from jaxrod.status import Status
@@ -66,19 +67,12 @@ class SceneFit:
                 "status": self.status.name.lower(), "reason": self.reason}
 
 
-def _with(scene: Scene, free: tuple[str, ...], p):
-    for j, key in enumerate(free):
-        scene = scene.replace(key, p[j])
-    return scene
-
-
-def _program(scene, disc, origin, span, z0, p0, data, mask, sigma, lower, upper, free, vary,
-             max_iter):
-    model = Structured(Input(vary))
+def _program(path, disc, origin, span, z0, p0, data, mask, sigma, lower, upper, max_iter):
+    model = MODEL
     m = disc.size
 
     def residuals(p, z):
-        args = (_with(scene, free, p), disc, origin, span)
+        args = (path, disc, origin, span, p)
         z_new, stats = jax.vmap(lambda zi: differentiable_fold(
             model, zi[:m], zi[-1], zi[m:2 * m], args))(z)
         lam = z_new[:, -1]
@@ -95,10 +89,10 @@ def _program(scene, disc, origin, span, z0, p0, data, mask, sigma, lower, upper,
     return res, origin + span * res.aux[:, -1], res.covariance(free_mask)
 
 
-_fit_program = jit(_program, static_argnames=("free", "vary", "max_iter"))
+_fit_program = jit(_program, static_argnames=("max_iter",))
 
 
-def fit_folds(scene: Scene, vary: str, vary_range: tuple[float, float], measured,
+def fit_folds(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float], measured,
               free, sigma: float = 1.0, bounds: dict | None = None, n: int = DEFAULT_N,
               max_iter: int = 60, design: bool = False) -> SceneFit:
     """Fit the inputs ``free`` (scene keys) so that the folds met along ``vary`` over
@@ -111,7 +105,6 @@ def fit_folds(scene: Scene, vary: str, vary_range: tuple[float, float], measured
     if not free:
         raise ParameterError("free: name at least one input to fit")
     for key in free:
-        scene.check_key(key)
         if key == vary:
             raise ParameterError(f"free: {key} is the input the folds are met along")
     if len(set(free)) != len(free):
@@ -128,7 +121,8 @@ def fit_folds(scene: Scene, vary: str, vary_range: tuple[float, float], measured
             raise ParameterError(f"bounds: {key!r} is not a free input ({', '.join(free)})")
     lower = np.array([bounds.get(k, (-np.inf, np.inf))[0] for k in free], float)
     upper = np.array([bounds.get(k, (-np.inf, np.inf))[1] for k in free], float)
-    p0 = np.array([float(np.asarray(scene.value(k))) for k in free])
+    path = along(scene, (vary, *free))
+    p0 = np.array(path.start[1:])
     if np.any((p0 < lower) | (p0 > upper)):
         raise ParameterError("bounds: the scene's values of the free inputs (the start) lie "
                              "outside the bounds")
@@ -140,11 +134,11 @@ def fit_folds(scene: Scene, vary: str, vary_range: tuple[float, float], measured
     span = stop - start
     z0 = np.stack([np.concatenate([f.state, f.null_vector, [(f.value - start) / span]])
                    for f in found[:data.size]])
-    disc = discretise(scene, n)
+    disc = discretise(path.template, n)
     res, values, cov = jax.device_get(_fit_program(
-        scene, disc, start, span, jnp.asarray(z0), jnp.asarray(p0),
+        path, disc, start, span, jnp.asarray(z0), jnp.asarray(p0),
         jnp.asarray(np.nan_to_num(data)), jnp.asarray(mask), float(sigma),
-        jnp.asarray(lower), jnp.asarray(upper), free, vary, max_iter))
+        jnp.asarray(lower), jnp.asarray(upper), max_iter))
     ok, settled = bool(res.ok), bool(res.converged)
     reasons = []
     if not ok:
@@ -165,8 +159,8 @@ def fit_folds(scene: Scene, vary: str, vary_range: tuple[float, float], measured
                     reason="; ".join(reasons) or None)
 
 
-def design_folds(scene: Scene, vary: str, vary_range: tuple[float, float], targets, free,
-                 bounds: dict | None = None, n: int = DEFAULT_N) -> SceneFit:
+def design_folds(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float],
+                 targets, free, bounds: dict | None = None, n: int = DEFAULT_N) -> SceneFit:
     """The inputs ``free`` whose folds along ``vary`` sit at ``targets`` (in the order met):
     ``fit_folds`` with the targets as data; converged means the targets are hit to 1e-9 of
     the range."""
