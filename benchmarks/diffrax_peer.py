@@ -74,7 +74,7 @@ def import_diffrax():
 def problem():
     scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(2.2),
                       "magnet": jr.Dipole(0.0236, 11.25 / 9.2, 0.0)})
-    fold = max(jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=N),
+    fold = max(jr.folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=N),
                key=lambda f: f.value)
     return scene.replace("magnet.alpha", fold.value + PAST), fold
 

@@ -64,8 +64,8 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args()
     rates_deg = [1e-4, 1e-3, 1e-2] if args.quick else np.geomspace(1e-5, 1e-1, 9).tolist()
-    fold = max(jr.scene_folds(SCENE, KEY, 0.0, math.pi / 2), key=lambda f: f.value)
-    held = jr.scene_sweep(SCENE, KEY, np.radians(np.r_[0:39:0.5]).tolist()).states[-1]
+    fold = max(jr.folds(SCENE, KEY, 0.0, math.pi / 2), key=lambda f: f.value)
+    held = jr.sweep(SCENE, KEY, np.radians(np.r_[0:39:0.5]).tolist()).states[-1]
     results, forms = {}, {}
     for c in (0.0, 1.0, 10.0):
         nf = normal_form(SCENE, fold, c)

@@ -154,7 +154,7 @@ def jaxrod_runs(final_time, c, dts):
 
     scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(G),
                       "magnet": jr.Dipole(M, D, 0.0)})
-    fold = max(jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=24),
+    fold = max(jr.folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=24),
                key=lambda f: f.value)
     at = scene.replace("magnet.alpha", fold.value + math.radians(PAST))
     runs = []

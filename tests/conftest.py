@@ -29,11 +29,16 @@ import jaxrod  # noqa: E402,F401  (sets float64)
 #: test at a time. Every other module stays on one worker, so that its module-scoped fixtures
 #: and compiled programs are built once.
 SPREAD = {"test_benchmarks.py", "test_notebooks.py"}
+#: Modules of the slow tier as a whole (``python -m pytest -m slow``): the benchmarks' quick
+#: forms and the notebooks, each a process of its own.
+SLOW = SPREAD
 
 
 def pytest_collection_modifyitems(config, items):
     for item in items:
         name = os.path.basename(str(item.fspath))
+        if name in SLOW:
+            item.add_marker(pytest.mark.slow)
         if name not in SPREAD:
             item.add_marker(pytest.mark.xdist_group(name))
     # the long subprocess tests first, so that no worker is left with one at the end

@@ -29,7 +29,24 @@ def test_the_opposed_field_buckles_the_cantilever_at_pi_squared_over_four(n):
     assert abs(p.value - math.pi**2 / 4) <= 1e-10
     assert p.morse_index == (0, 1) and abs(p.unfolding) <= 1e-12
     assert np.max(np.abs(p.state)) <= 1e-12  # on the straight branch
-    assert not jr.scene_folds(OPPOSED, "field.load", 0.0, 4.0, n=n, throw=False)
+    assert not jr.folds(OPPOSED, "field.load", 0.0, 4.0, n=n, throw=False)
+
+
+def test_a_branch_holds_its_special_points_in_the_order_met():
+    """``jr.branch`` refines what it meets (BifurcationKit's continuation result): the
+    opposed field's straight branch to load 70 meets the Euler loads (2k - 1)^2 pi^2 / 4
+    (closed form) as branch points, in order; the paper's branch in the magnet's angle
+    meets its two folds (upper, then lower), each what ``jr.folds`` refines."""
+    b = jr.branch(OPPOSED, "field.load", 0.0, 70.0, n=24)
+    assert [p.kind for p in b.special_points] == ["branch_point"] * 3
+    euler = [(2 * k - 1) ** 2 * math.pi**2 / 4 for k in (1, 2, 3)]
+    assert np.allclose([p.value for p in b.special_points], euler, rtol=0, atol=1e-9)
+    paper = jr.DipoleMagnet(2.2, 0.0236, 1.2228, 0.0).scene
+    b = jr.branch(paper, "magnet.alpha", 0.0, 0.5 * math.pi, n=12)
+    folds = jr.folds(paper, "magnet.alpha", 0.0, 0.5 * math.pi, n=12)
+    assert [p.kind for p in b.special_points] == ["fold", "fold"]
+    assert [p.value for p in b.special_points] == [f.value for f in folds]
+    assert b.special_points[0].value > b.special_points[1].value  # upper, then lower
 
 
 def test_the_bent_branch_is_followed_and_matches_shooting():

@@ -149,12 +149,12 @@ def test_the_snap_past_the_papers_upper_fold_lands_where_the_sweep_does():
     energy descent lands on."""
     scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(2.2),
                       "magnet": jr.Dipole(0.0236, 11.25 / 9.2, 0.0)})
-    fold = max(jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2), key=lambda f: f.value)
+    fold = max(jr.folds(scene, "magnet.alpha", 0.0, math.pi / 2), key=lambda f: f.value)
     past = fold.value + math.radians(0.05)
     tr = simulate(scene.replace("magnet.alpha", past), fold.state, 40.0, 0.02, damping=3.0,
                   scheme="bdf2")
     assert tr.converged
-    sweep = jr.scene_sweep(scene, "magnet.alpha",
+    sweep = jr.sweep(scene, "magnet.alpha",
                            np.radians(np.r_[0.0:math.degrees(fold.value):0.5]).tolist()
                            + [past])
     landing = sweep.snaps[-1]["tip_after_deg"]
@@ -211,9 +211,9 @@ def test_the_switching_lag_follows_the_folds_normal_form(damping, exponent):
 
     scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(2.2),
                       "magnet": jr.Dipole(0.0236, 11.25 / 9.2, 0.0)})
-    fold = max(jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2), key=lambda f: f.value)
+    fold = max(jr.folds(scene, "magnet.alpha", 0.0, math.pi / 2), key=lambda f: f.value)
     a0 = fold.value - math.radians(0.25)
-    held = jr.scene_sweep(scene, "magnet.alpha", np.radians(np.r_[0:39:0.5]).tolist())
+    held = jr.sweep(scene, "magnet.alpha", np.radians(np.r_[0:39:0.5]).tolist())
     start = jr.equilibrium(scene.replace("magnet.alpha", a0), state=held.states[-1])
     nf = normal_form(scene, fold, damping)
     rates = np.radians([1e-4, 1e-3, 1e-2])
@@ -317,7 +317,7 @@ def test_the_snap_duration_is_differentiable_in_youngs_modulus():
         return jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(G0 * r),
                          "magnet": jr.Dipole(M0 * r, D, 0.0)})
 
-    fold = max(jr.scene_folds(scene(1.0), "magnet.alpha", 0.0, math.pi / 2),
+    fold = max(jr.folds(scene(1.0), "magnet.alpha", 0.0, math.pi / 2),
                key=lambda f: f.value)
 
     def seconds(e):  # e = E / E0

@@ -197,7 +197,7 @@ def test_inputs_by_name():
 
 def test_the_generic_folds_of_the_papers_scene_agree_with_its_diagram_and_fast_path():
     found = jr.folds(jr.magnet_scene(G, M, D), n=N).folds
-    generic = jr.scene_folds(paper_scene(), "magnet.alpha", 0.0, math.pi / 2, n=N)
+    generic = jr.folds(paper_scene(), "magnet.alpha", 0.0, math.pi / 2, n=N)
     # met in order along the branch: the upper fold first, then the lower one
     assert len(generic) == len(found) == 2 and generic[0].value > generic[1].value
     for f, ref in zip(generic[::-1], found):
@@ -214,7 +214,7 @@ def test_a_new_term_runs_through_branch_folds_fold_curve_and_map():
     scene = spring_scene(0.05)
     b = jr.branch(scene, "magnet.alpha", 0.0, math.pi / 2, n=N)
     assert b.complete and b.vary == "magnet.alpha" and len(b.fold_indices) == 2
-    folds = jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=N)
+    folds = jr.folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=N)
     assert len(folds) == 2 and all(f.converged for f in folds)
     # independent derivatives: Moore-Spence on the autodiff of the whole energy
     disc = planar_discretisation(N)
@@ -225,8 +225,8 @@ def test_a_new_term_runs_through_branch_folds_fold_curve_and_map():
                                  jnp.asarray(f.null_vector), args)
         assert bool(ref.newton.converged) and abs(float(ref.lam) - f.value) <= 1e-11
     # the spring holds the rod up: both folds move towards the vertical, continuously in k
-    weak = jr.scene_folds(spring_scene(1e-6), "magnet.alpha", 0.0, math.pi / 2, n=N)
-    bare = jr.scene_folds(paper_scene(), "magnet.alpha", 0.0, math.pi / 2, n=N)
+    weak = jr.folds(spring_scene(1e-6), "magnet.alpha", 0.0, math.pi / 2, n=N)
+    bare = jr.folds(paper_scene(), "magnet.alpha", 0.0, math.pi / 2, n=N)
     assert all(abs(a.value - b.value) <= 1e-5 for a, b in zip(weak, bare))
     assert folds[0].value < bare[0].value and folds[1].value < bare[1].value
     curve = jr.fold_curve(scene, "magnet.alpha", (0.0, math.pi / 2), "spring.k", (0.0, 0.3),
@@ -234,7 +234,7 @@ def test_a_new_term_runs_through_branch_folds_fold_curve_and_map():
     assert curve.along_values.min() <= 0.0 and curve.along_values.max() >= 0.3
     k = 0.2
     on_curve = np.interp(k, curve.along_values, curve.values)
-    direct = jr.scene_folds(spring_scene(k), "magnet.alpha", 0.0, math.pi / 2, n=N)[0].value
+    direct = jr.folds(spring_scene(k), "magnet.alpha", 0.0, math.pi / 2, n=N)[0].value
     assert abs(on_curve - direct) <= 1e-4
     fmap = jr.fold_map(scene, "magnet.alpha", (0.0, math.pi / 2),
                        ("spring.k", np.array([0.0, 0.2])), ("magnet.D", np.array([1.2, 1.3])),
@@ -261,7 +261,7 @@ def test_bad_requests_are_named():
     with pytest.raises(jr.ParameterError, match="two different finite values"):
         jr.branch(paper_scene(), "magnet.alpha", 0.3, 0.3)
     with pytest.raises(SceneError, match="not an input"):
-        jr.scene_folds(paper_scene(), "magnet.angle", 0.0, 1.0)
+        jr.folds(paper_scene(), "magnet.angle", 0.0, 1.0)
     with pytest.raises(jr.ParameterError, match="fold"):
         jr.fold_curve(paper_scene(), "magnet.alpha", (0.0, 0.2), "magnet.D", (1.1, 1.3), n=N)
     with pytest.raises(ValueError, match="shape"):
@@ -279,10 +279,10 @@ def test_a_quasi_static_sweep_snaps_just_past_the_folds():
     the rod follows the magnet, lets go at the first value past the upper fold, and is
     captured at the first value past the lower fold on the way back."""
     scene = spring_scene(0.05)
-    upper, lower = jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=N)
+    upper, lower = jr.folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=N)
     up = np.radians(np.arange(0.0, 60.0 + 1e-9, 0.5))
     values = np.concatenate([up, up[::-1][1:]])
-    s = jr.scene_sweep(scene, "magnet.alpha", values, n=N, progress=False)
+    s = jr.sweep(scene, "magnet.alpha", values, n=N, progress=False)
     assert s.complete and s.converged and s.snapped.sum() == 2
     release, capture = np.nonzero(s.snapped)[0]
     assert values[release - 1] < upper.value < values[release]

@@ -45,7 +45,7 @@ def test_the_map_is_what_scene_folds_gives_at_its_points(in_memory):
     for iy, ix in ((0, 0), (2, 1)):
         scene = _scene().replace("magnet.D", AXES[0][1][ix]).replace("magnet.M",
                                                                       AXES[1][1][iy])
-        folds = jr.scene_folds(scene, "magnet.alpha", *ALPHA, n=N)
+        folds = jr.folds(scene, "magnet.alpha", *ALPHA, n=N)
         assert abs(in_memory.first[iy, ix] - folds[0].value) <= 1e-10
         assert abs(in_memory.second[iy, ix] - folds[1].value) <= 1e-10
 
@@ -65,7 +65,7 @@ def test_a_point_whose_folds_converged_is_not_marked_failed():
     assert np.all(m.status == int(jr.Status.SUCCESS)) and np.all(m.count >= 1)
     for iy, ix in ((0, 0), (1, 1)):
         at = scene.replace("field.load", loads[ix]).replace("gravity.G", gs[iy])
-        first = jr.scene_folds(at, "field.angle", *angles, n=N)[0]
+        first = jr.folds(at, "field.angle", *angles, n=N)[0]
         assert abs(m.first[iy, ix] - first.value) <= 1e-10
 
 

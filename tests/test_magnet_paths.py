@@ -46,7 +46,7 @@ def test_the_branch_stops_where_the_magnet_enters_the_reach(rail):
     assert np.all(b.value <= ENTRY) and b.value[-1] >= ENTRY - 0.1
     assert np.max(b.residual_norm) <= 1e-10  # what was kept is converged
     with pytest.raises(SolverError, match="reach"):
-        jr.scene_folds(file.scene, "field0.along", 0.0, 4.0, n=12)
+        jr.folds(file.scene, "field0.along", 0.0, 4.0, n=12)
 
 
 def _run(argv):

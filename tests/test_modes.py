@@ -76,7 +76,7 @@ def test_the_soft_mode_at_a_fold_goes_as_the_fourth_root_of_the_distance():
     |alpha - alpha*|^(1/2) (so omega as its fourth root), and is zero at the fold."""
     scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(2.2),
                       "magnet": jr.Dipole(0.0236, 11.25 / 9.2, 0.0)})
-    fold = max(jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2), key=lambda f: f.value)
+    fold = max(jr.folds(scene, "magnet.alpha", 0.0, math.pi / 2), key=lambda f: f.value)
     at = scene.replace("magnet.alpha", fold.value)
     assert abs(modes(at, fold.state, n=16).omega_squared[0]) <= 1e-8
     w2 = []

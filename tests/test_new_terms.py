@@ -99,11 +99,11 @@ def test_a_magnet_on_a_curve_in_a_scene_file(tmp_path):
                                  "path = \"curve\"\ncoefficients = [[0.5, 1.2], [1.0, 0.0]]"))
     file = load(path)
     key, factor = file.input_of("field.0.t")
-    got = [f.value / factor for f in jr.scene_folds(file.scene, key, -0.5, 1.0, n=16)]
+    got = [f.value / factor for f in jr.folds(file.scene, key, -0.5, 1.0, n=16)]
     rail = tmp_path / "rail.toml"
     rail.write_text(RAIL)
     ref_file = load(rail)
-    ref = [f.value for f in jr.scene_folds(ref_file.scene, "field0.position.0", 0.0, 1.5,
+    ref = [f.value for f in jr.folds(ref_file.scene, "field0.position.0", 0.0, 1.5,
                                            n=16)]
     assert len(got) == len(ref) == 2
     assert all(abs(g + 0.5 - r) <= 1e-10 for g, r in zip(got, ref))

@@ -154,7 +154,7 @@ def test_snap_when_the_field_rotates_round_the_cantilever(cantilever):
     to 1e-9 degrees, and the fold met on the way back its mirror image."""
     file = load_file(cantilever, ["field.0.B=1.25e-3"])
     key, factor = file.input_of("field.0.angle_deg")
-    folds = jr.scene_folds(file.scene, key, factor * 90.0, factor * 359.0, n=24)
+    folds = jr.folds(file.scene, key, factor * 90.0, factor * 359.0, n=24)
     assert len(folds) == 2 and all(f.converged for f in folds)
     up, down = (f.value / factor for f in folds)
     assert abs(up + down - 360.0) <= 1e-9  # the mirror symmetry a -> 2 pi - a
@@ -170,7 +170,7 @@ def test_pitchfork_of_the_opposed_field_is_a_stability_change_without_fold(canti
     b = jr.branch(file.scene, key, 0.0, factor * 1e-3, n=16)
     i = int(np.argmax(b.morse_index > 0))
     assert i > 0 and b.value[i - 1] < math.pi**2 / 4 < b.value[i]
-    assert not jr.scene_folds(file.scene, key, 0.0, factor * 1e-3, n=16, throw=False)
+    assert not jr.folds(file.scene, key, 0.0, factor * 1e-3, n=16, throw=False)
 
 
 PAPER_RIG = """
@@ -199,7 +199,7 @@ def test_the_papers_rig_as_a_scene_file_gives_the_papers_folds(tmp_path):
     path.write_text(PAPER_RIG.format(G=G, M=M, D=D))
     file = load(path)
     key, factor = file.input_of("field.0.angle_deg")
-    found = jr.scene_folds(file.scene, key, 0.0, factor * 90.0, n=16)
+    found = jr.folds(file.scene, key, 0.0, factor * 90.0, n=16)
     paper = locate_folds(make_scene(G, M, D), n=16)
     assert len(found) == len(paper.folds) == 2
     for f, p in zip(sorted(found, key=lambda f: f.value), paper.folds):
@@ -266,8 +266,8 @@ def test_bad_scene_files_exit_2_with_one_line(cantilever, tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(BAD[2][0])
     for argv, word in [(("equilibrium", str(bad)), "field.0.B"),
-                       (("folds", str(cantilever), "--vary", "rod.length", "--from", "0.04",
-                         "--to", "0.06"), "rod.length"),
+                       (("folds", str(cantilever), "--vary", "rod.support", "--from", "0.04",
+                         "--to", "0.06"), "rod.support"),
                        (("equilibrium", str(cantilever), "--set", "field.0.B=3e3"), "B"),
                        (("equilibrium", str(tmp_path / "missing.toml")), "missing.toml")]:
         proc = _cli(*argv)
@@ -289,7 +289,7 @@ def test_the_shipped_permanent_magnet_rig_in_si_gives_the_presets_folds():
     rod, _ = preset("permanent-magnet")
     paper = locate_folds(make_scene(rod.G, rod.M(NDFEB_MAGNET), rod.D(NDFEB_MAGNET)), n=16)
     key, factor = file.input_of("field.0.angle_deg")
-    found = sorted(jr.scene_folds(file.scene, key, 0.0, factor * 90.0, n=16),
+    found = sorted(jr.folds(file.scene, key, 0.0, factor * 90.0, n=16),
                    key=lambda f: f.value)
     assert len(found) == len(paper.folds) == 2
     for f, p in zip(found, paper.folds):
@@ -364,7 +364,7 @@ def test_a_magnet_on_a_straight_rail_folds_against_shooting(tmp_path):
     path.write_text(RAIL)
     file = load(path)
     key, factor = file.input_of("field.0.position.0")
-    folds = jr.scene_folds(file.scene, key, 0.0, 1.5, n=24)
+    folds = jr.folds(file.scene, key, 0.0, 1.5, n=24)
     assert len(folds) == 2
     release, capture = sorted(f.value / factor for f in folds)[::-1]
     ref_release, ref_capture = rail_folds_by_shooting(0.25, 1.2)
@@ -392,7 +392,7 @@ def test_cli_foldcurve_on_a_scene_file_passes_the_cusp_of_the_pitchfork(tmp_path
 
 def test_cli_map_on_a_scene_file(tmp_path):
     """The rail's folds on a 2 x 2 grid of the magnet's strength and height: map.json, map.png
-    and the store map.zarr; a point's fold count and first fold as jr.scene_folds gives them
+    and the store map.zarr; a point's fold count and first fold as jr.folds gives them
     there."""
     path = tmp_path / "rail.toml"
     path.write_text(RAIL)
@@ -405,7 +405,7 @@ def test_cli_map_on_a_scene_file(tmp_path):
     data = json.loads((out_dir / "map.json").read_text())
     file = load(path, ["field.0.M=0.25", "field.0.position.1=1.2"])
     key, factor = file.input_of("field.0.position.0")
-    folds = jr.scene_folds(file.scene, key, 0.0, 1.5, n=16)
+    folds = jr.folds(file.scene, key, 0.0, 1.5, n=16)
     assert data["count"][0][1] == len(folds) == 2
     assert abs(data["first"][0][1] - folds[0].value / factor) <= 1e-9
     assert data["count"][1][0] == 0  # higher and weaker: no loop
@@ -430,10 +430,10 @@ def test_a_rail_at_any_angle_is_a_load_path(tmp_path):
     path.write_text(RAIL)
     direct = load(path)
     key, _ = direct.input_of("field.0.position.0")
-    ref = [f.value for f in jr.scene_folds(direct.scene, key, 0.0, 1.5, n=16)]
+    ref = [f.value for f in jr.folds(direct.scene, key, 0.0, 1.5, n=16)]
     railed = load(path, ["field.0.position=[0.5, 1.2]", "field.0.rail=[2.0, 0.0]"])
     key, factor = railed.input_of("field.0.along")
-    got = [f.value / factor for f in jr.scene_folds(railed.scene, key, -0.5, 1.0, n=16)]
+    got = [f.value / factor for f in jr.folds(railed.scene, key, -0.5, 1.0, n=16)]
     assert len(got) == len(ref) == 2
     assert all(abs(g + 0.5 - r) <= 1e-10 for g, r in zip(got, ref))
     tilted = load(path, ["field.0.position=[0.0, 1.5]", "field.0.rail=[1.0, -1.0]",
@@ -448,10 +448,10 @@ def test_a_rail_at_any_angle_is_a_load_path(tmp_path):
 def test_cli_sweep_of_a_scene_file_snaps_past_the_fold():
     """The field rotating round the hard-magnetic cantilever (load 5), quasi-statically in
     steps of 0.1 degrees: the rod snaps at the first step past the fold (212.1477 degrees,
-    refined by jr.scene_folds); at a finite rate it snaps later."""
+    refined by jr.folds); at a finite rate it snaps later."""
     file = load("hard-magnetic-cantilever")
     key, factor = file.input_of("field.0.angle_deg")
-    fold = jr.scene_folds(file.scene, key, factor * 90.0, factor * 300.0, n=16)[0].value / factor
+    fold = jr.folds(file.scene, key, factor * 90.0, factor * 300.0, n=16)[0].value / factor
     proc = _cli("sweep", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg", "--from",
                 "90", "--to", "300", "--step", "0.1", "--json")
     assert proc.returncode == 0, proc.stderr

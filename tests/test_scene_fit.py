@@ -48,7 +48,7 @@ def test_design_hits_targets_verified_by_shooting(rail):
     M, z = d.estimates["field0.M"], d.estimates["field0.position.2"]
     release, capture = rail_folds_by_shooting(M, z)
     assert abs(release - 1.05) <= 1e-8 and abs(capture - 0.99) <= 1e-8
-    again = jr.scene_folds(file.scene.replace("field0.M", M).replace("field0.position.2", z),
+    again = jr.folds(file.scene.replace("field0.M", M).replace("field0.position.2", z),
                            key, 0.0, 1.5)
     assert [abs(f.value - t) <= 1e-9 for f, t in zip(again, (1.05, 0.99))] == [True, True]
 

@@ -22,8 +22,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.bistability.grid_store import GridAxis, GridStore, Variable, read
-from jaxrod.equilibria.branch import MODEL, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, ramp
+from jaxrod.equilibria.trace import MODEL, check_range
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit, padded
 from jaxrod.progress import Interrupted, interrupt_requested, progress_bar

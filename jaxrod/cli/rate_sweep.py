@@ -40,7 +40,7 @@ def rate_sweep_command(args) -> int:
     n = args.n or 16
     origin = 0.0 if abs(b) > abs(a) else math.copysign(90.0, a if a else b)
     path = np.radians(np.linspace(origin, a, max(2, int(abs(a - origin) / 0.25) + 1)))
-    held = jr.scene_sweep(scene, "magnet.alpha", path.tolist(), n=n)
+    held = jr.sweep(scene, "magnet.alpha", path.tolist(), n=n)
     at = scene.replace("magnet.alpha", math.radians(a))
     s = rate_sweep(at, "magnet.alpha", held.states[-1], math.radians(b),
                    math.radians(args.rate), args.damping, dt=args.dt, n=n, tol=_tol(args))
@@ -101,7 +101,7 @@ def sweep_on_file(args) -> int:
         step = args.step or abs(b - a) / 200.0
         values = np.linspace(a, b, max(2, int(round(abs(b - a) / step)) + 1))
         try:
-            s = jr.scene_sweep(file, args.vary, values.tolist(), n=args.n or 16,
+            s = jr.sweep(file, args.vary, values.tolist(), n=args.n or 16,
                                state=start.state, progress=not args.quiet)
         except Interrupted as stop:
             if out_dir is not None:
@@ -222,7 +222,7 @@ def prediction(scene, key, state, stop, rate, damping, n, unit):
     from jaxrod.dynamics.normal_form import DAMPED_EXPONENT, INERTIAL_EXPONENT, normal_form
 
     start = float(scene.value(key))
-    folds = jr.scene_folds(scene, key, start, stop, n=n, state=state, throw=False)
+    folds = jr.folds(scene, key, start, stop, n=n, state=state, throw=False)
     if not folds or not folds[0].converged:
         return None
     nf = normal_form(scene, folds[0], damping, n)

@@ -27,7 +27,7 @@ def cmd_snap(args) -> int:
     physical = _physical_snap(args)
     scene = jr.Scene({"bending": jr.Bending(), "gravity": jr.Gravity(args.G),
                       "magnet": jr.Dipole(args.M, args.D, 0.0)})
-    folds = sorted(jr.scene_folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=args.n),
+    folds = sorted(jr.folds(scene, "magnet.alpha", 0.0, math.pi / 2, n=args.n),
                    key=lambda f: f.value)
     if len(folds) < 2:
         raise ParameterError("G/M/D: this rig has no two folds in (0, 90] degrees (no snap)")
@@ -88,7 +88,7 @@ def snap_on_file(args) -> int:
         raise ParameterError(f"fold: a number K >= 1 (the K-th fold met), got {args.fold!r}")
     file = _load(args)
     key, start, stop, factor = _range(args, file)
-    folds = jr.scene_folds(file, key, start, stop, n=args.n)
+    folds = jr.folds(file, key, start, stop, n=args.n)
     if len(folds) < k:
         raise ParameterError(f"fold: the path along {args.vary} from {args.start:g} to "
                              f"{args.stop:g} meets {len(folds)} fold(s); --fold {k} asks for "

@@ -151,7 +151,7 @@ class NormalForm:
 
 
 def normal_form(scene: Scene, fold: Fold, damping: float, n: int = DEFAULT_N) -> NormalForm:
-    """The normal form in time of ``fold`` (of ``scene``, from ``jr.scene_folds`` at degree
+    """The normal form in time of ``fold`` (of ``scene``, from ``jr.folds`` at degree
     ``n``) with the linear drag ``damping``."""
     if not fold.converged:
         raise ParameterError("fold: the fold did not converge; refine it first")

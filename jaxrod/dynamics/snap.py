@@ -84,7 +84,7 @@ class Snap:
 def snap(scene: Scene, fold: Fold, damping: float, t_end: float = 60.0, dt: float = 0.01,
          past: float = 1e-3, band: float = 0.5, n: int = DEFAULT_N,
          kelvin_voigt: float = 0.0, scheme: str | None = None) -> Snap:
-    """The snap from ``fold`` (of ``scene``, from ``jr.scene_folds``) with drag ``damping``;
+    """The snap from ``fold`` (of ``scene``, from ``jr.folds``) with drag ``damping``;
     ``past``: how far the input is moved past the fold (its units), ``band``: degrees;
     ``kelvin_voigt``: internal damping (``jaxrod.dynamics.integrate``); ``scheme``: the
     integrator (``simulate``'s; by default BDF2, which settles, where there is damping, and

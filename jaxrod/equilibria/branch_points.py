@@ -31,18 +31,18 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.tail import tail_estimate
-from jaxrod.equilibria.branch import (
+from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
+from jaxrod.equilibria.folds import _span
+from jaxrod.equilibria.record import Branch, SpecialPoint, branch_from_runs, checked
+from jaxrod.equilibria.trace import (
     MODEL,
     NO_REST,
-    branch,
     branch_options,
     check_range,
     observe,
     path_of,
+    trace,
 )
-from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
-from jaxrod.equilibria.folds import _span
-from jaxrod.equilibria.record import Branch, SpecialPoint, branch_from_runs, checked
 from jaxrod.params import ParameterError
 from jaxrod.programs import bucket, jit, padded
 from jaxrod.scenes.path import ALONG, along
@@ -62,6 +62,8 @@ class BranchPoint(SpecialPoint):
 
     unfolding: float
     morse_index: tuple[int, int]
+
+    kind = "branch_point"
 
 
 def stability_changes(b: Branch) -> np.ndarray:
@@ -158,7 +160,7 @@ def branch_points(scene: Scene, vary: str, start: float, stop: float, n: int = D
     ``throw``: raise ``SolverError`` if a refinement does not converge.
     """
     start, stop = check_range(scene, vary, start, stop)
-    b = branch(scene, vary, start, stop, n, state, margins=margins)
+    b = trace(scene, vary, start, stop, n, state, margins=margins)
     return checked(refine_branch_points(scene, b, n), "branch point", throw)
 
 

@@ -22,9 +22,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.tail import tail_estimate
-from jaxrod.equilibria.branch import MODEL, NO_REST, branch, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
 from jaxrod.equilibria.record import Branch, SpecialPoint, checked
+from jaxrod.equilibria.trace import MODEL, NO_REST, check_range, trace
 from jaxrod.programs import bucket, jit, padded
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, along
@@ -44,6 +44,8 @@ class Fold(SpecialPoint):
     dF_dvalue: float
     d2F_dq2: float
     normal_form_c: float
+
+    kind = "fold"
 
 
 def _refine_one(x0, lam0, path, disc, origin, span):
@@ -108,11 +110,11 @@ def folds(scene: Scene | FileScene, vary: str, start: float, stop: float, n: int
 
     ``throw``: raise ``SolverError`` if a fold's refinement does not converge, or if the
     branch ended before ``stop`` (folds beyond would be missing: ``Branch.status`` says
-    why; ``jaxrod.equilibria.branch`` and ``refine`` give the branch and its folds).
-    ``margins``: the magnets' radii by term name (``jaxrod.equilibria.branch.reach_along``).
+    why; ``jaxrod.equilibria.branch`` gives the branch with its folds).
+    ``margins``: the magnets' radii by term name (``jaxrod.equilibria.trace.reach_along``).
     """
     start, stop = check_range(scene, vary, start, stop)
-    b = branch(scene, vary, start, stop, n, state, margins=margins)
+    b = trace(scene, vary, start, stop, n, state, margins=margins)
     if throw and not b.complete:
         raise SolverError(next((s for s in b.status if not s.ok), Status.NOT_CONVERGED),
                           f"the branch along {vary} ended at {b.value[-1]:.6g}")

@@ -28,6 +28,8 @@ class Branch:
       newton_iterations, residual_norm: corrector diagnostics per point.
       status: why each traced segment stopped (``jaxrod.Status``; str() is the message).
       vary: the varied input's key; tip_position: X = int d3 per point (generic scenes).
+      special_points: the refined folds and branch points, in the order met (each with
+        ``kind`` and ``value``; ``jaxrod.equilibria.branch``).
     """
 
     value: np.ndarray
@@ -44,6 +46,7 @@ class Branch:
     complete: bool
     vary: str = "magnet.alpha"
     tip_position: np.ndarray | None = None
+    special_points: tuple = ()
 
     @property
     def alpha(self) -> np.ndarray:
@@ -173,6 +176,9 @@ class SpecialPoint:
     iterations: int
     status: Status
     error_estimate: float = dataclasses.field(default=math.nan, kw_only=True)
+
+    #: What the point is ("fold", "branch_point").
+    kind = "special point"
 
     def as_dict(self) -> dict:
         """The scalars (the arrays ``state`` and ``null_vector`` left out; the error

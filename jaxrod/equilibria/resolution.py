@@ -11,11 +11,11 @@ from __future__ import annotations
 import dataclasses
 
 from jaxrod.discretise.tail import tail_estimate
-from jaxrod.equilibria.branch import branch
 from jaxrod.equilibria.branch_points import refine_branch_points
 from jaxrod.equilibria.equilibrium import DEFAULT_N, Equilibrium, discretise, equilibrium
 from jaxrod.equilibria.folds import refine
 from jaxrod.equilibria.record import Branch
+from jaxrod.equilibria.trace import trace
 from jaxrod.scenes.scene import Scene
 from jaxrod.status import Status
 
@@ -83,7 +83,7 @@ def resolved_branch(scene: Scene, vary: str, start: float, stop: float, n: int =
     largest tail of the branch's states and its special points' is at most ``tol``."""
     degrees = [n] + [d for d in DEGREES if n < d <= n_max]
     for d in degrees:
-        b = branch(scene, vary, start, stop, d, margins=margins)
+        b = trace(scene, vary, start, stop, d, margins=margins)
         folds = refine(scene, b, d)
         bps = refine_branch_points(scene, b, d) if points else []
         disc = discretise(scene, d)

@@ -18,8 +18,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.equilibria.branch import MODEL, NO_REST, path_of
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, equilibrium, solve_at, tip
+from jaxrod.equilibria.trace import MODEL, NO_REST, path_of
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.progress import Interrupted, interrupt_requested, progress_bar

@@ -26,9 +26,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.equilibria.branch import MODEL, check_range
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise
 from jaxrod.equilibria.folds import folds as scene_folds
+from jaxrod.equilibria.trace import MODEL, check_range
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.files import FileScene

@@ -13,9 +13,10 @@ import numpy as np
 
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.equilibria.folds import Fold as SceneFold
+from jaxrod.equilibria.folds import folds as scene_folds
 from jaxrod.equilibria.record import Branch
 from jaxrod.magnet.diagram import DEFAULT_N, default_options, trace_diagram
-from jaxrod.params import RANGES, check, check_degree, check_track_clearance
+from jaxrod.params import RANGES, ParameterError, check, check_degree, check_track_clearance
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle, tip_position
 from jaxrod.solvers.continuation import continuation_run
@@ -64,10 +65,10 @@ class Fold(PaperNames, SceneFold):
     names read the common fields (``PaperNames``).
     """
 
-    kind: str
     tip_parabola_c: float
     opens: str
     hessian_smallest: tuple[float, float]
+    kind: str = dataclasses.field(default="fold", kw_only=True)  # the paper's: lower, upper
 
     def as_dict(self) -> dict:
         return {
@@ -333,3 +334,23 @@ def _folds_on(scene, disc, branch: Branch, n: int, tol) -> FoldReport:
                         f"{NEAR_SINGULAR:g} of zero: two folds may hide within one continuation "
                         "step (parameters near the cusp)")
     return FoldReport(folds=folds, branch=branch, n=n, problems=tuple(problems), scene=scene)
+
+
+def folds(scene, vary: str | None = None, start: float | None = None,
+          stop: float | None = None, n: int = DEFAULT_N, **options):
+    """The folds of any scene, or rig from ``jaxrod.load_scene``, along the input ``vary``
+    from ``start`` to ``stop``: in the order met, each refined by Moore-Spence with its
+    normal form and its ``value`` (``jaxrod.equilibria.folds.folds``; ``options``: state,
+    throw, margins). A rig's every number can be ``vary`` (``rod.youngs_modulus``, in the
+    file's units).
+
+    The paper's rig as a preset: ``folds(DipoleMagnet(G, M, D))`` without ``vary`` is its
+    fold pair in the magnet's angle, named ``lower`` and ``upper`` (``locate_folds``, with
+    the near-cusp re-trace; ``options``: branch, tol, throw)."""
+    if vary is None:
+        if not isinstance(scene, DipoleMagnet):
+            raise ParameterError("vary: name the input the folds are met along (a key of the "
+                                 "scene, or any number of a rig file)")
+        return locate_folds(scene, n, **options)
+    scene = scene.scene if isinstance(scene, DipoleMagnet) else scene
+    return scene_folds(scene, vary, start, stop, n, **options)

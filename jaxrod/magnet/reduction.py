@@ -318,7 +318,6 @@ class ReducedFold(PaperNames, SceneFold):
     form from F's derivatives) with the paper's names (``PaperNames``), the one-mode start
     (q0, alpha0), the other derivatives of F there and the inner w-solve's diagnostics."""
 
-    kind: str
     q0: float
     alpha0_deg: float
     dF_dq: float
@@ -326,6 +325,7 @@ class ReducedFold(PaperNames, SceneFold):
     one_mode_converged: bool
     correction_converged: bool
     correction_residual: float
+    kind: str = dataclasses.field(default="fold", kw_only=True)  # the paper's: lower, upper
 
     @property
     def opens(self) -> str:

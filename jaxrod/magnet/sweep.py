@@ -11,6 +11,7 @@ import numpy as np
 
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.equilibria.sweep import follow_path
+from jaxrod.equilibria.sweep import sweep as scene_sweep
 from jaxrod.magnet.diagram import (
     DEFAULT_N,
     _equilibrium,
@@ -18,7 +19,7 @@ from jaxrod.magnet.diagram import (
     _relax,
 )
 from jaxrod.magnet.folds import Fold
-from jaxrod.params import check, check_degree
+from jaxrod.params import ParameterError, check, check_degree
 from jaxrod.programs import jit
 from jaxrod.progress import Interrupted
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
@@ -129,3 +130,20 @@ def square_root_law(scene: DipoleMagnet, fold: Fold, n: int = DEFAULT_N,
         out[side] = {"exponent": float(slope), "converged": ok,
                      "stable": bool(jnp.linalg.eigvalsh(H)[0] > 0.0)}
     return out
+
+
+def sweep(scene, vary: str | None = None, values=None, n: int = DEFAULT_N, **options):
+    """Move the input ``vary`` of any scene, or rig from ``jaxrod.load_scene``, through
+    ``values`` quasi-statically, the rod snapping where its equilibrium ceases to exist
+    (``jaxrod.equilibria.sweep.sweep``; ``options``: state, progress).
+
+    The paper's rig as a preset: ``sweep(DipoleMagnet(G, M, D))`` without ``vary`` is the
+    experiment's protocol, the magnet's angle to +-alpha_max and back
+    (``hysteresis_sweep``; ``options``: alpha_max_deg, step_deg, progress, throw)."""
+    if vary is None:
+        if not isinstance(scene, DipoleMagnet):
+            raise ParameterError("vary: name the input to move (a key of the scene, or any "
+                                 "number of a rig file) and its values")
+        return hysteresis_sweep(scene, n, **options)
+    scene = scene.scene if isinstance(scene, DipoleMagnet) else scene
+    return scene_sweep(scene, vary, values, n, **options)
