@@ -32,12 +32,53 @@ SPREAD = {"test_benchmarks.py", "test_notebooks.py"}
 #: Modules of the slow tier as a whole (``python -m pytest -m slow``): the benchmarks' quick
 #: forms and the notebooks, each a process of its own.
 SLOW = SPREAD
+#: Tests of the slow tier: derivatives against finite differences or whole-energy autodiff
+#: beside the assembled ones the default tier checks (``test_engine``), spectral convergence
+#: sweeps, stress and interruption runs, the main job and the long command-line runs whose
+#: analyses the default tier checks in Python. CI runs them after the default tier.
+SLOW_TESTS = {
+    "test_derivatives.py::test_assembled_derivatives_match_autodiff",
+    "test_engine.py::test_the_papers_scenes_are_their_printed_energies",
+    "test_engine.py::test_the_generic_fold_curve_of_the_papers_scene_passes_its_cusp",
+    "test_new_terms.py::test_assembled_derivatives_equal_autodiff",
+    "test_new_terms.py::test_a_programmed_magnetisation_in_a_magnets_field",
+    "test_calibration.py::test_chain_rule_jacobian_matches_central_differences",
+    "test_fold_curves.py::test_cusp_location_derivatives_match_finite_differences",
+    "test_fold_curves.py::test_cusp_agrees_with_merging_fold_pairs",
+    "test_reduction.py::test_implicit_derivatives_of_w_match_finite_differences",
+    "test_reduction.py::test_reduced_function_is_the_q_derivative_of_the_reduced_energy_and_"
+    "vanishes_on_branch",
+    "test_reduction.py::test_second_variation_decomposition_at_and_near_the_folds",
+    "test_fit.py::test_fold_angle_gradients_match_central_differences",
+    "test_magnet.py::test_spectral_convergence_of_fold_angle",
+    "test_scene_files.py::test_spectral_convergence_of_the_tip_angle",
+    "test_batch.py::test_near_the_cusp_every_answer_is_that_of_locate_folds",
+    "test_batch.py::test_no_bistable_set_is_reported_without_its_folds",
+    "test_batch.py::test_two_programs_at_once_do_not_hang",
+    "test_batch.py::test_tier_one_alone_reports_not_converged_never_not_bistable",
+    "test_batch.py::test_small_clearances_found_from_the_first_bracketing_cells",
+    "test_soak.py::test_thousands_of_mixed_calls_keep_mappings_and_memory_flat",
+    "test_design_map.py::test_ctrl_c_at_ten_moments_exits_130_and_keeps_the_finished_chunks",
+    "test_cli.py::test_reproduce_writes_report",
+    "test_cli.py::test_track_json_and_files",
+    "test_figures.py::test_design_map_figure",
+    "test_outofplane.py::test_out_of_plane_form_is_positive_on_the_engaged_branch_and_"
+    "matches_the_formula",
+    "test_scene_stability.py::test_the_papers_scene_as_terms_against_the_papers_check",
+    "test_dynamics.py::test_cli_snap_json",
+    "test_dynamics.py::test_cli_snap_of_the_papers_wire_in_seconds",
+    "test_dynamics.py::test_the_snap_duration_is_differentiable_in_youngs_modulus",
+    "test_dynamics.py::test_the_discrete_gradient_conserves_the_energy_of_a_large_motion",
+    "test_dynamics.py::test_the_3d_rod_swings_as_the_planar_one",
+    "test_scene_files.py::test_cli_sweep_of_a_scene_file_snaps_past_the_fold",
+    "test_scene_files.py::test_cli_map_on_a_scene_file",
+}
 
 
 def pytest_collection_modifyitems(config, items):
     for item in items:
         name = os.path.basename(str(item.fspath))
-        if name in SLOW:
+        if name in SLOW or f"{name}::{item.originalname}" in SLOW_TESTS:
             item.add_marker(pytest.mark.slow)
         if name not in SPREAD:
             item.add_marker(pytest.mark.xdist_group(name))

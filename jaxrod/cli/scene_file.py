@@ -235,7 +235,7 @@ def folds_on_file(args) -> int:
         print(f"{args.rig}: {len(r.folds)} folds along {args.vary} from {args.start:g} to "
               f"{args.stop:g} (N = {r.n}, error estimate {r.error_estimate:.1e} rad)")
         for f in out["folds"]:
-            print(f"  fold at {args.vary} = {f['value']:.10f} (tip angle "
+            print(f"  fold at {args.vary} = {f['value']:.12g} (tip angle "
                   f"{f['tip_angle_deg']:.10f} deg)"
                   + ("" if f["converged"] else "  NOT CONVERGED"))
         if not out["converged"]:

@@ -94,7 +94,10 @@ def snap_on_file(args) -> int:
                              f"{args.stop:g} meets {len(folds)} fold(s); --fold {k} asks for "
                              f"fold {k}")
     fold = folds[k - 1]
-    s = snap(file, fold, args.damping, t_end=args.t_end, dt=args.dt, n=args.n,
+    # past the fold by 1e-3 of the scene's input (radians for an angle), in the file's units;
+    # a number that enters as a power (Young's modulus): by 1e-3 of its value
+    past = 1e-3 / abs(file.inputs[key][1]) if key in file.inputs else 1e-3 * abs(fold.value)
+    s = snap(file, fold, args.damping, t_end=args.t_end, dt=args.dt, n=args.n, past=past,
              kelvin_voigt=args.kelvin_voigt, scheme=args.scheme)
     out = {"rig": args.rig, "set": args.set, "vary": args.vary, "fold": k,
            "fold_value": fold.value / factor, "value": s.value / factor,
