@@ -72,13 +72,17 @@ SLOW_TESTS = {
     "test_dynamics.py::test_the_3d_rod_swings_as_the_planar_one",
     "test_scene_files.py::test_cli_sweep_of_a_scene_file_snaps_past_the_fold",
     "test_scene_files.py::test_cli_map_on_a_scene_file",
+    "test_engine.py::test_assembled_derivatives_equal_autodiff_of_the_whole_energy[3d]",
+    "test_three_d.py::test_magnet_track_leaving_the_plane_snaps_where_the_planar_folds_are",
+    "test_figures.py::test_fold_curve_figure",
 }
 
 
 def pytest_collection_modifyitems(config, items):
     for item in items:
         name = os.path.basename(str(item.fspath))
-        if name in SLOW or f"{name}::{item.originalname}" in SLOW_TESTS:
+        if name in SLOW or f"{name}::{item.originalname}" in SLOW_TESTS \
+                or f"{name}::{item.name}" in SLOW_TESTS:
             item.add_marker(pytest.mark.slow)
         if name not in SPREAD:
             item.add_marker(pytest.mark.xdist_group(name))
