@@ -127,3 +127,9 @@ def test_fold_pair_coverage_quick(tmp_path):
         assert row["missed"] == row["spurious"] == row["off"] == row["unknown"] == 0, row
     assert set(result["throughput"][0]["pairs_per_s"]) >= {"fold_pairs (all tiers)",
                                                             "tier 1 alone (fold_pairs_program)"}
+
+
+def test_fold_map_against_folds_quick(tmp_path):
+    result = run_quick("fold_map_against_folds.py", tmp_path)
+    assert result["sets"] == 100 and result["disagreements"] == 0, result["rows"]
+    assert result["bistable_sets"] > 0
