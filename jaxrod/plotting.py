@@ -289,8 +289,16 @@ def design_map_figure(data: dict, spec, cusps=(), crossings=()):
 
     fig, ax = plt.subplots(figsize=(8, 5.6))
     X, Y = np.meshgrid(data["x"], data["y"])
-    reason = data["reason"]
-    width = np.where(reason == 0, data["width_deg"], np.nan)
+    from jaxrod.magnet.batch import (
+        BISTABLE,
+        FOLD_BEYOND_90,
+        INVALID_INPUT,
+        NOT_BISTABLE,
+        NOT_CONVERGED,
+    )
+
+    status = data["status"]
+    width = np.where(status == BISTABLE, data["width_deg"], np.nan)
     handles = []
     if np.isfinite(width).any():
         # one cell per grid point (no interpolation between points of different kinds)
@@ -302,17 +310,20 @@ def design_map_figure(data: dict, spec, cusps=(), crossings=()):
                                norm=BoundaryNorm(levels, 256))
         fig.colorbar(filled, ax=ax, label="hysteresis width (deg)")
         for name, colour in (("capture_deg", "w"), ("release_deg", "0.2")):
-            field = np.where(reason == 0, data[name], np.nan)
+            field = np.where(status == BISTABLE, data[name], np.nan)
             if np.isfinite(field).sum() >= 4:
                 lines = ax.contour(X, Y, field, levels=6, colors=colour, linewidths=0.7)
                 ax.clabel(lines, fontsize=6, fmt="%.0f")
     # every point is drawn as what it is: cells of the grid (pcolormesh) for the non-bistable
     # and the unknown, so that none of them looks like another
     for mask, style, label in (
-            (reason == 1, {"color": "0.8"}, "not bistable"),
-            (reason == 2, {"color": "#f2b8b5"}, "a fold beyond 90 deg (outside the sweep)"),
-            (reason == 3, {"color": "0.55"}, "invalid input (the magnet would touch the rod)"),
-            ((reason == -1) | (reason == 4), {"color": "none", "hatch": "xx", "ec": "0.4"},
+            (status == NOT_BISTABLE, {"color": "0.8"}, "not bistable"),
+            (status == FOLD_BEYOND_90, {"color": "#f2b8b5"},
+             "a fold beyond 90 deg (outside the sweep)"),
+            (status == INVALID_INPUT, {"color": "0.55"},
+             "invalid input (the magnet would touch the rod)"),
+            ((status == -1) | (status == NOT_CONVERGED), {"color": "none", "hatch": "xx",
+                                                          "ec": "0.4"},
              "not computed, or no solver converged")):
         if mask.any():
             ax.pcolormesh(X, Y, np.where(mask, 1.0, np.nan), shading="nearest",

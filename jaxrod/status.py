@@ -17,7 +17,8 @@ import numpy as np
 class Status(enum.IntEnum):
     """What a solver or an analysis ended with. ``ok`` says whether the result is usable;
     ``str(status)`` is its message. Newton's codes are 0-3, a curve's (continuation, fold
-    curve) 4-8; RUNNING (-1) marks a loop that has not stopped."""
+    curve) 4-8; a map point's certificates NO_FOLD_PAIR and FOLD_OUT_OF_RANGE are answers
+    (``ok``); RUNNING (-1) marks a loop that has not stopped."""
 
     RUNNING = -1
     SUCCESS = 0
@@ -34,6 +35,8 @@ class Status(enum.IntEnum):
     NOT_CONVERGED = 11
     MAGNET_IN_REACH = 12
     UNDER_RESOLVED = 13
+    NO_FOLD_PAIR = 14
+    FOLD_OUT_OF_RANGE = 15
 
     @property
     def ok(self) -> bool:
@@ -53,7 +56,7 @@ class Status(enum.IntEnum):
 
 
 _OK = {Status.SUCCESS, Status.REACHED_BOUND, Status.FOLDS_FOUND, Status.CUSP_PASSED,
-       Status.SNAPPED_WHILE_LOADING}
+       Status.SNAPPED_WHILE_LOADING, Status.NO_FOLD_PAIR, Status.FOLD_OUT_OF_RANGE}
 
 MESSAGES = {
     Status.RUNNING: "running",
@@ -85,6 +88,10 @@ MESSAGES = {
     "before it is kept; shorten the range or move the path away",
     Status.UNDER_RESOLVED: "converged, but the discretisation does not resolve the answer "
     "(its a posteriori error estimate is above round-off): raise N",
+    Status.NO_FOLD_PAIR: "certified: fewer than two folds on the branch over the whole range "
+    "(no hysteresis loop there)",
+    Status.FOLD_OUT_OF_RANGE: "certified: a fold of the pair lies outside the range asked for "
+    "(the paper's rig: beyond 90 degrees, outside the magnet's sweep)",
 }
 
 

@@ -134,7 +134,7 @@ def test_small_clearances_found_from_the_first_bracketing_cells():
     z, converged, _ = program(*(np.array(c) for c in zip(*rows)))
     assert np.asarray(converged).all()
     res = design_map.solve_points(DesignPoint.from_groups(*rows[0]), np.array(rows))
-    assert (res["reason"] == design_map.OK).all()
+    assert (res["status"] == design_map.OK).all()
     for i, (G, M, Di) in enumerate(rows):
         ref = _reference(G, M, Di)
         assert np.max(np.abs(np.degrees(np.asarray(z[i, :, -1])) - ref)) < 1e-8

@@ -17,7 +17,9 @@ from jaxrod.bistability.design_map import (
     FOLD_BEYOND_90,
     INVALID_INPUT,
     NOT_BISTABLE,
+    NOT_CONVERGED,
     OK,
+    REASONS,
     MapAxis,
     MapSpec,
     fold_crossings,
@@ -35,7 +37,7 @@ def _same(a, b):
     """Identical maps: the same reasons and NaN pattern, angles equal to round-off (XLA may
     vectorise a different batch shape differently: the fold angles' round-off floor is
     ~1e-11 degrees)."""
-    np.testing.assert_array_equal(a["reason"], b["reason"])
+    np.testing.assert_array_equal(a["status"], b["status"])
     for name in ("capture_deg", "release_deg", "width_deg"):
         np.testing.assert_array_equal(np.isnan(a[name]), np.isnan(b[name]))
         np.testing.assert_allclose(a[name], b[name], rtol=0, atol=1e-11, equal_nan=True)
@@ -72,11 +74,11 @@ def test_every_tier_and_reason_against_locate_folds():
         v[names.index("track-radius")], v[names.index("E")] = R, E
         rows.append(v)
     res = solve_points(point, np.array(rows))
-    assert list(res["reason"]) == [OK, NOT_BISTABLE, INVALID_INPUT, FOLD_BEYOND_90]
+    assert list(res["status"]) == [OK, NOT_BISTABLE, INVALID_INPUT, FOLD_BEYOND_90]
     for i, v in enumerate(rows[:2]):
         G, M, D = DesignPoint("physical", tuple(v)).groups()
         rep = locate_folds(DipoleMagnet(G, M, D, 0.0))
-        if res["reason"][i] == OK:
+        if res["status"][i] == OK:
             low, up = rep.folds
             assert abs(res["capture_deg"][i] - low.alpha_deg) < 1e-9
             assert abs(res["release_deg"][i] - up.alpha_deg) < 1e-9
@@ -87,7 +89,7 @@ def test_every_tier_and_reason_against_locate_folds():
 
 def test_store_opens_and_matches_solve_points(reference):
     point = _point()
-    assert (reference["reason"] == OK).all()
+    assert (reference["status"] == OK).all()
     iy, ix = 3, 5
     v = list(point.values)
     v[point.index("track-radius")] = reference["x"][ix]
@@ -123,14 +125,15 @@ def test_store_is_zarr_that_xarray_opens_without_warnings(reference, tmp_path, c
     assert ds["capture_deg"].attrs["units"] == "degree" and "source" in ds.attrs
     assert ds["E"].attrs["units"] == "Pa"
     # a point that no solver converged, and a chunk not written
-    (out / "map.zarr" / "reason" / "0.0").write_bytes(np.full((4, 4), 4, np.int8).tobytes())
-    (out / "map.zarr" / "reason" / "1.1").unlink()
+    (out / "map.zarr" / "status" / "0.0").write_bytes(
+        np.full((4, 4), NOT_CONVERGED, np.int8).tobytes())
+    (out / "map.zarr" / "status" / "1.1").unlink()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        reason = xr.open_zarr(out / "map.zarr")["reason"].values
-    assert (reason[:4, :4] == 4).all() and np.isnan(reason[4:, 4:8]).all()
-    mine = read_store(out)["reason"]
-    assert (mine[4:, 4:8] == -1).all() and (mine[:4, :4] == 4).all()
+        reason = xr.open_zarr(out / "map.zarr")["status"].values
+    assert (reason[:4, :4] == NOT_CONVERGED).all() and np.isnan(reason[4:, 4:8]).all()
+    mine = read_store(out)["status"]
+    assert (mine[4:, 4:8] == -1).all() and (mine[:4, :4] == NOT_CONVERGED).all()
     assert np.count_nonzero(np.isnan(reason)) == np.count_nonzero(mine == -1)
 
 
@@ -153,7 +156,7 @@ def test_resume_after_kill_loses_nothing(reference, tmp_path):
     out = tmp_path / "killed"
     proc = subprocess.Popen([*CLI, "--out", str(out)], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE)
-    chunks = lambda: [f for f in (out / "map.zarr" / "reason").glob("*") if f.name[0].isdigit()]
+    chunks = lambda: [f for f in (out / "map.zarr" / "status").glob("*") if f.name[0].isdigit()]
     deadline = time.monotonic() + 600
     while time.monotonic() < deadline and proc.poll() is None:
         if len(chunks()) >= 2:  # two of six chunks written
@@ -168,7 +171,7 @@ def test_resume_after_kill_loses_nothing(reference, tmp_path):
     assert again.returncode == 0, again.stderr
     assert json.loads(again.stdout)["resumed"] == done
     resumed = read_store(out)
-    for name in ("capture_deg", "release_deg", "width_deg", "reason"):  # same chunk shapes
+    for name in ("capture_deg", "release_deg", "width_deg", "status"):  # same chunk shapes
         np.testing.assert_array_equal(resumed[name], reference[name])
 
 
@@ -220,7 +223,7 @@ def test_fold_crossings_bound_the_region_beyond_90_degrees():
         rows.append(v)
     res = solve_points(point, np.array(rows))
     data = {"x": x.values(), "y": y.values()} | {k: v[None, :] for k, v in res.items()}
-    reason = res["reason"]
+    reason = res["status"]
     assert reason[0] == FOLD_BEYOND_90 and reason[-1] == OK
     last_beyond = np.nonzero(reason == FOLD_BEYOND_90)[0].max()
     assert (reason[last_beyond + 1:] == OK).all()
@@ -241,7 +244,7 @@ def test_ctrl_c_at_ten_moments_exits_130_and_keeps_the_finished_chunks(tmp_path)
     compilation, and after 1 to 60 finished chunks): exit 130 every time, with one line
     on stderr, soon (no run goes on to the end: a Ctrl-C swallowed in a garbage-collection
     callback did that), and every chunk marked complete readable with its four variables."""
-    chunk_files = lambda out: [f for f in (out / "map.zarr" / "reason").glob("*")
+    chunk_files = lambda out: [f for f in (out / "map.zarr" / "status").glob("*")
                                if f.name[0].isdigit()]
     for i, (delay, after) in enumerate([(1.0, 0), (4.0, 0), (0, 1), (0, 2), (0, 3), (0, 6),
                                         (0, 10), (0, 20), (0, 35), (0, 60)]):
@@ -251,16 +254,16 @@ def test_ctrl_c_at_ten_moments_exits_130_and_keeps_the_finished_chunks(tmp_path)
         time.sleep(delay)
         deadline = time.monotonic() + 300
         while after and time.monotonic() < deadline and proc.poll() is None:
-            if (out / "map.zarr" / "reason").exists() and len(chunk_files(out)) >= after:
+            if (out / "map.zarr" / "status").exists() and len(chunk_files(out)) >= after:
                 break
             time.sleep(0.01)
         assert proc.poll() is None, f"moment {i}: the map ended before the signal"
-        seen = len(chunk_files(out)) if (out / "map.zarr" / "reason").exists() else 0
+        seen = len(chunk_files(out)) if (out / "map.zarr" / "status").exists() else 0
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=120)
         assert proc.returncode == 130, (i, err[-2000:])
         assert len(err.strip().splitlines()) == 1, (i, err[-2000:])
-        if not (out / "map.zarr" / "reason").exists():
+        if not (out / "map.zarr" / "status").exists():
             continue
         done = chunk_files(out)
         assert seen <= len(done) <= seen + 2, (i, seen, len(done))
@@ -269,7 +272,7 @@ def test_ctrl_c_at_ten_moments_exits_130_and_keeps_the_finished_chunks(tmp_path)
                 assert (out / "map.zarr" / name / f.name).stat().st_size == 16 * 8
         if done:
             data = read_store(out)
-            assert ((data["reason"] >= -1) & (data["reason"] <= 4)).all()
+            assert np.isin(data["status"], [-1, *REASONS]).all()
 
 
 @pytest.mark.parametrize("x, y, name", [
@@ -298,4 +301,4 @@ def test_map_axes_need_not_be_given_as_inputs(tmp_path, capsys):
                  "--out", str(out), "--quiet", "--no-plot", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["inputs"]["D"]["source"] == "the map's axis"
-    assert summary["reason_counts"]["bistable"] == 4
+    assert summary["status_counts"]["bistable"] == 4

@@ -134,11 +134,13 @@ def test_design_map_figure_spans_the_grid_and_draws_every_kind_of_point(tmp_path
     spec = jr.MapSpec(point, jr.MapAxis.parse("D:1.15:1.45:6"),
                       jr.MapAxis.parse("M:0.015:0.03:5"), chunk=6)
     x, y = spec.x.values(), spec.y.values()
+    from jaxrod.magnet.batch import FOLD_BEYOND_90, INVALID_INPUT, NOT_BISTABLE
+
     reason = np.zeros((5, 6), np.int8)
-    reason[:, 4:] = 1
-    reason[0, 0], reason[1, 0], reason[4, :2] = 3, 2, -1
+    reason[:, 4:] = NOT_BISTABLE
+    reason[0, 0], reason[1, 0], reason[4, :2] = INVALID_INPUT, FOLD_BEYOND_90, -1
     width = np.where(reason == 0, 10.0 + np.arange(30).reshape(5, 6), np.nan)
-    data = {"x": x, "y": y, "reason": reason, "width_deg": width,
+    data = {"x": x, "y": y, "status": reason, "width_deg": width,
             "capture_deg": width + 20.0, "release_deg": 2 * width + 20.0}
     cusps = [{"D": 1.6, "M": 0.02}]  # outside the grid
     fig = jr.design_map_figure(data, spec, cusps)

@@ -32,7 +32,7 @@ def test_map_computes_at_the_n_it_records(tmp_path, capsys):
     attrs = json.loads((out / "map.zarr" / ".zattrs").read_text())
     assert json.loads(attrs["jaxrod_map"])["n"] == 4
     # N = 4 is ~1e-3 degrees off the converged folds at these clearances (docs/accuracy.md)
-    assert (a["reason"] == 0).all() and (b["reason"] == 0).all()
+    assert (a["status"] == 0).all() and (b["status"] == 0).all()
     assert 1e-7 < np.max(np.abs(a["capture_deg"] - b["capture_deg"])) < 1e-1
 
 

@@ -17,16 +17,17 @@ tiers, those of ``jaxrod.magnet.batch.fold_pairs``, so no point is dropped silen
 The retry tiers run on padded batches (``programs.retry_size``), so that a map compiles each
 of their programs a few times, not once per number of failures.
 
-Each point ends with a reason code (``REASONS``): OK, NOT_BISTABLE (the branch through the
-straight rod has fewer than two folds with alpha in (0, 180] degrees), FOLD_BEYOND_90 (a fold
-leaves alpha in (0, 90]: the experiment's magnet cannot reach it), INVALID_INPUT (the magnet
-would touch the rod, or an input is not positive) or NOT_CONVERGED; angles are NaN unless OK.
+Each point ends with a ``jaxrod.Status`` code (``REASONS``): OK, NOT_BISTABLE (the branch
+through the straight rod has fewer than two folds with alpha in (0, 180] degrees),
+FOLD_BEYOND_90 (a fold leaves alpha in (0, 90]: the experiment's magnet cannot reach it),
+INVALID_INPUT (the magnet would touch the rod, or an input is not positive) or NOT_CONVERGED;
+angles are NaN unless OK.
 
 The grid is written chunk by chunk into a store of ``jaxrod.bistability.grid_store`` (Zarr
 version 2, written with numpy; ``xarray.open_zarr`` reads it): variables ``capture_deg`` (the
 lower fold: the magnet angle where the disengaged rod is captured), ``release_deg`` (the upper
-fold), ``width_deg`` and ``reason`` on dimensions named by the two inputs (y first), with
-units and provenance attributes; ``reason`` is -1 (``NOT_COMPUTED``, outside the codes) where
+fold), ``width_deg`` and ``status`` on dimensions named by the two inputs (y first), with
+units and provenance attributes; ``status`` is -1 (``NOT_COMPUTED``, outside the codes) where
 a chunk was not written yet. A killed run started again with the same arguments skips the
 complete chunks and loses nothing.
 
@@ -51,7 +52,7 @@ import numpy as np
 from jaxrod.bistability.fold_curves import find_cusp, fold_curves
 from jaxrod.bistability.grid_store import NOT_COMPUTED, GridAxis, GridStore, Variable, read
 from jaxrod.design_point import DesignPoint, groups_of, range_of
-from jaxrod.magnet.batch import (  # noqa: F401 (the reason codes, re-exported)
+from jaxrod.magnet.batch import (  # noqa: F401 (the status codes, re-exported)
     BISTABLE,
     FOLD_BEYOND_90,
     INVALID_INPUT,
@@ -65,9 +66,10 @@ from jaxrod.magnet.batch import (  # noqa: F401 (the reason codes, re-exported)
 from jaxrod.params import UNITS, ParameterError
 from jaxrod.programs import bucket, jit, padded
 
-#: The reason codes of a map's points: ``jaxrod.magnet.batch.STATUS`` (OK is BISTABLE).
+#: The status codes of a map's points (``jaxrod.Status``; ``jaxrod.magnet.batch.STATUS``
+#: says what each means for the paper's map; OK is BISTABLE, Status.SUCCESS).
 OK, REASONS = BISTABLE, STATUS
-VARIABLES = ("capture_deg", "release_deg", "width_deg", "reason")
+VARIABLES = ("capture_deg", "release_deg", "width_deg", "status")
 #: Chebyshev degree of the map's solves (the batched path's default: the fold angles reach
 #: their round-off floor from N = 12 at the paper's parameters).
 MAP_N = 12
@@ -169,7 +171,7 @@ def _sharded(arrays, mesh, size: int | None = None):
 
 def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
                  devices=None, size: int | None = None) -> dict[str, np.ndarray]:
-    """Capture/release angles (deg), width and reason for rows of input ``values`` (K, P);
+    """Capture/release angles (deg), width and status for rows of input ``values`` (K, P);
     ``size``: the batch the first tier runs (the rows padded to it; a map's chunk size, so
     that its edge chunks run the same compiled program; default ``programs.bucket``)."""
     devices = list(devices or jax.local_devices())
@@ -194,7 +196,7 @@ def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
     alphas = np.where((reason == OK)[:, None], alphas, np.nan)
     deg = np.degrees(alphas)
     return {"capture_deg": deg[:, 0], "release_deg": deg[:, 1],
-            "width_deg": deg[:, 1] - deg[:, 0], "reason": reason}
+            "width_deg": deg[:, 1] - deg[:, 0], "status": reason}
 
 
 # --- the on-disk store (``jaxrod.bistability.grid_store``) --------------------------------
@@ -202,11 +204,12 @@ def solve_points(point: DesignPoint, values: np.ndarray, n: int = MAP_N,
 LONG_NAMES = {"capture_deg": "magnet angle of the lower fold (capture of the disengaged rod)",
               "release_deg": "magnet angle of the upper fold (release of the engaged rod)",
               "width_deg": "hysteresis width, release - capture",
-              "reason": "0 bistable; 1 not bistable; 2 a fold beyond 90 deg; 3 invalid "
-              "input; 4 not converged; -1 not computed (missing chunk)"}
-#: The map's variables (``reason`` last: it marks a chunk complete).
-_VARIABLES = {name: Variable("|i1" if name == "reason" else "<f8",
-                             "1" if name == "reason" else "degree", LONG_NAMES[name])
+              "status": f"jaxrod.Status code: {OK} bistable; {NOT_BISTABLE} not bistable; "
+              f"{FOLD_BEYOND_90} a fold beyond 90 deg; {INVALID_INPUT} invalid input; "
+              f"{NOT_CONVERGED} not converged; -1 not computed (missing chunk)"}
+#: The map's variables (``status`` last: it marks a chunk complete).
+_VARIABLES = {name: Variable("|i1" if name == "status" else "<f8",
+                             "1" if name == "status" else "degree", LONG_NAMES[name])
               for name in VARIABLES}
 
 
@@ -258,7 +261,7 @@ def map_store(out: Path, spec: MapSpec) -> GridStore:
              if k not in (spec.x.name, spec.y.name)}
     attrs = {"title": f"jaxrod bistability map over {spec.x.name} and {spec.y.name}",
              "source": f"jaxrod {version} (jax {jax.__version__}), N = {spec.n} Chebyshev",
-             "fixed_inputs": json.dumps(fixed), "reason_codes": json.dumps(
+             "fixed_inputs": json.dumps(fixed), "status_codes": json.dumps(
                  {str(k): v for k, v in (REASONS | {NOT_COMPUTED: "not computed"}).items()})}
     axis = lambda a: GridAxis(a.name, tuple(a.values()), UNITS[a.name] or "1")
     return GridStore(Path(out), _VARIABLES, axis(spec.x), axis(spec.y), spec.chunk,
@@ -277,7 +280,7 @@ def store_path(out: Path) -> Path:
 
 def read_store(out: Path) -> dict[str, np.ndarray]:
     """The map's variables and axes from a store written here (numpy only): the variables
-    of ``VARIABLES`` (``reason`` NOT_COMPUTED where a chunk was not written), the axes by
+    of ``VARIABLES`` (``status`` NOT_COMPUTED where a chunk was not written), the axes by
     their inputs' names and as ``x`` and ``y``. ``out``: the store, or the folder that holds
     it (``store_path``)."""
     return read(store_path(out))
@@ -312,8 +315,8 @@ def fold_crossings(spec, data, rows: int = 12) -> list[dict]:
     ``thm:planar_fold`` followed in x)."""
     out = []
     for iy in np.unique(np.linspace(0, spec.y.count - 1, rows).astype(int)):
-        width = np.where(data["reason"][iy] == 0, data["width_deg"][iy], -np.inf)
-        if not np.isfinite(width.max()) or not (data["reason"][iy] == 2).any():
+        width = np.where(data["status"][iy] == OK, data["width_deg"][iy], -np.inf)
+        if not np.isfinite(width.max()) or not (data["status"][iy] == FOLD_BEYOND_90).any():
             continue
         ix = int(np.argmax(width))
         start = spec.point.replace(spec.x.name, data["x"][ix]).replace(spec.y.name,
@@ -337,7 +340,7 @@ def cusp_curve(spec, data, rows: int = 12) -> list[dict]:
     goes to zero)."""
     out = []
     for iy in np.unique(np.linspace(0, spec.y.count - 1, rows).astype(int)):
-        width = np.where(data["reason"][iy] == 0, data["width_deg"][iy], -np.inf)
+        width = np.where(data["status"][iy] == OK, data["width_deg"][iy], -np.inf)
         if not np.isfinite(width.max()):
             continue
         ix = int(np.argmax(width))

@@ -135,10 +135,15 @@ def cmd_map(args) -> int:
                "inputs": inputs} | counts
     if jax.process_index() == 0 and jax.process_count() == 1:
         data = read_store(out)
-        reasons = np.bincount(data["reason"].ravel().astype(int), minlength=5)
-        summary["reason_counts"] = {name: int(c) for name, c in zip(
-            ("bistable", "not_bistable", "fold_beyond_90", "invalid_input", "not_converged"),
-            reasons, strict=True)}
+        from jaxrod.status import Status
+
+        codes = data["status"].ravel().astype(int)
+        summary["status_counts"] = {
+            name: int(np.sum(codes == int(code))) for name, code in (
+                ("bistable", Status.SUCCESS), ("not_bistable", Status.NO_FOLD_PAIR),
+                ("fold_beyond_90", Status.FOLD_OUT_OF_RANGE),
+                ("invalid_input", Status.INVALID_INPUT),
+                ("not_converged", Status.NOT_CONVERGED))}
         if not args.no_plot:
             from jaxrod.bistability.design_map import cusp_curve, fold_crossings
             from jaxrod.plotting import design_map_figure
@@ -152,10 +157,10 @@ def cmd_map(args) -> int:
     else:
         print(f"{summary['points']} points in {counts['chunks']} chunks ({counts['computed']} "
               f"computed, {counts['resumed']} already done) -> {out}")
-        if "reason_counts" in summary:
-            print(", ".join(f"{k}: {v}" for k, v in summary["reason_counts"].items()))
+        if "status_counts" in summary:
+            print(", ".join(f"{k}: {v}" for k, v in summary["status_counts"].items()))
     # a point whose solve failed makes the map a failed solve (exit 1; the map is kept)
-    return 1 if summary.get("reason_counts", {}).get("not_converged", 0) else 0
+    return 1 if summary.get("status_counts", {}).get("not_converged", 0) else 0
 
 
 def add_cusp(sub) -> None:

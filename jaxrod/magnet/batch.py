@@ -47,6 +47,7 @@ from jaxrod.solvers.folds import (
     moore_spence_step,
 )
 from jaxrod.solvers.newton import newton
+from jaxrod.status import Status
 from jaxrod.stored import StoredProgram
 
 #: The (q, alpha) grid that brackets the one-mode folds: q in [0, Q_MAX], alpha in [0, 90] deg.
@@ -294,7 +295,10 @@ DTYPES = ("float64", "float32")
 
 #: A parameter set's answer: its two folds, a certificate that there are none, or that no
 #: solver converged. "Not converged" is never "not bistable".
-BISTABLE, NOT_BISTABLE, FOLD_BEYOND_90, INVALID_INPUT, NOT_CONVERGED = 0, 1, 2, 3, 4
+#: Codes of ``jaxrod.Status`` (one code space for every result and store).
+BISTABLE, NOT_BISTABLE, FOLD_BEYOND_90, INVALID_INPUT, NOT_CONVERGED = (
+    int(Status.SUCCESS), int(Status.NO_FOLD_PAIR), int(Status.FOLD_OUT_OF_RANGE),
+    int(Status.INVALID_INPUT), int(Status.NOT_CONVERGED))
 STATUS = {BISTABLE: "bistable: both folds in (0, 90] degrees",
           NOT_BISTABLE: "not bistable: fewer than two folds on the branch through the "
           "straight rod (continuation to 180 degrees)",

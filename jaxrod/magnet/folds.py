@@ -16,9 +16,15 @@ from jaxrod.equilibria.folds import Fold as SceneFold
 from jaxrod.equilibria.folds import folds as scene_folds
 from jaxrod.equilibria.record import Branch
 from jaxrod.magnet.diagram import DEFAULT_N, default_options, trace_diagram
-from jaxrod.params import RANGES, ParameterError, check, check_degree, check_track_clearance
+from jaxrod.params import RANGES, check, check_degree, check_track_clearance
 from jaxrod.programs import jit
-from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle, tip_position
+from jaxrod.scenes.dipole import (
+    ALPHA_MODEL,
+    DipoleMagnet,
+    preset_or_scene,
+    tip_angle,
+    tip_position,
+)
 from jaxrod.solvers.continuation import continuation_run
 from jaxrod.solvers.folds import (
     FoldPoint,
@@ -347,10 +353,6 @@ def folds(scene, vary: str | None = None, start: float | None = None,
     The paper's rig as a preset: ``folds(DipoleMagnet(G, M, D))`` without ``vary`` is its
     fold pair in the magnet's angle, named ``lower`` and ``upper`` (``locate_folds``, with
     the near-cusp re-trace; ``options``: branch, tol, throw)."""
-    if vary is None:
-        if not isinstance(scene, DipoleMagnet):
-            raise ParameterError("vary: name the input the folds are met along (a key of the "
-                                 "scene, or any number of a rig file)")
-        return locate_folds(scene, n, **options)
-    scene = scene.scene if isinstance(scene, DipoleMagnet) else scene
-    return scene_folds(scene, vary, start, stop, n, **options)
+    return preset_or_scene(scene, vary, lambda s: locate_folds(s, n, **options),
+                           lambda s: scene_folds(s, vary, start, stop, n, **options),
+                           "the folds are met along")

@@ -19,10 +19,10 @@ from jaxrod.magnet.diagram import (
     _relax,
 )
 from jaxrod.magnet.folds import Fold
-from jaxrod.params import ParameterError, check, check_degree
+from jaxrod.params import check, check_degree
 from jaxrod.programs import jit
 from jaxrod.progress import Interrupted
-from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, preset_or_scene, tip_angle
 from jaxrod.status import SolverError, Status
 
 
@@ -140,10 +140,6 @@ def sweep(scene, vary: str | None = None, values=None, n: int = DEFAULT_N, **opt
     The paper's rig as a preset: ``sweep(DipoleMagnet(G, M, D))`` without ``vary`` is the
     experiment's protocol, the magnet's angle to +-alpha_max and back
     (``hysteresis_sweep``; ``options``: alpha_max_deg, step_deg, progress, throw)."""
-    if vary is None:
-        if not isinstance(scene, DipoleMagnet):
-            raise ParameterError("vary: name the input to move (a key of the scene, or any "
-                                 "number of a rig file) and its values")
-        return hysteresis_sweep(scene, n, **options)
-    scene = scene.scene if isinstance(scene, DipoleMagnet) else scene
-    return scene_sweep(scene, vary, values, n, **options)
+    return preset_or_scene(scene, vary, lambda s: hysteresis_sweep(s, n, **options),
+                           lambda s: scene_sweep(s, vary, values, n, **options),
+                           "to move (and its values)")

@@ -24,6 +24,7 @@ import jax.numpy as jnp
 
 from jaxrod.derivatives import Structured
 from jaxrod.discretise.planar import PlanarDiscretisation
+from jaxrod.params import ParameterError
 from jaxrod.scenes.functionals import bending_energy, gravity_energy
 from jaxrod.scenes.scene import Scene
 from jaxrod.scenes.terms import Bending, Dipole, Gravity
@@ -117,3 +118,15 @@ def _at_alpha(alpha, args):
 #: E_perm as a function of (theta, alpha) with args = (scene, disc), its derivatives assembled
 #: from the scene's structure (``jaxrod.derivatives``): the model the magnet solvers use.
 ALPHA_MODEL = Structured(_at_alpha)
+
+
+def preset_or_scene(scene, vary, paper, generic, need: str):
+    """``paper(scene)`` for the paper's rig (a ``DipoleMagnet``) without ``vary``: the
+    paper's question on its preset; else ``generic(scene)`` on the scene (the paper's rig as
+    its scene of terms). ``need`` says what ``vary`` is for in the error without one."""
+    if vary is None:
+        if not isinstance(scene, DipoleMagnet):
+            raise ParameterError(f"vary: name the input {need} (a key of the scene, or any "
+                                 "number of a rig file)")
+        return paper(scene)
+    return generic(scene.scene if isinstance(scene, DipoleMagnet) else scene)
