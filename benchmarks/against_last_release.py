@@ -53,6 +53,10 @@ ENTRY_POINTS = {
     "fit (E alone)": "jr.fit_youngs_modulus([-25.0, 38.0, 24.0, -42.0], 1.0, True)",
     "fit (E, offset)": "jr.fit([-25.0, 38.0, 24.0, -42.0])",
     "reduced_folds": f"jr.reduced_folds({SCENE})",
+    # any scene (the generic folds were jr.scene_folds before the one-vocabulary change)
+    "folds of a scene (magnet.alpha)": f"(getattr(jr, 'scene_folds', None) or jr.folds)("
+                                       f"{SCENE}.scene, 'magnet.alpha', 0.0, 1.5707963267948966)",
+    "branch of a scene (gravity.G)": f"jr.branch({SCENE}.scene, 'gravity.G', 2.2, 4.0)",
 }
 
 CHILD = """
