@@ -44,7 +44,7 @@ from jaxrod.equilibria.trace import (
     trace,
 )
 from jaxrod.params import ParameterError
-from jaxrod.programs import bucket, jit, padded
+from jaxrod.programs import jit, padded
 from jaxrod.scenes.path import ALONG, along
 from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.continuation import continuation_run
@@ -129,9 +129,9 @@ def refine_branch_points(scene: Scene, b: Branch, n: int = DEFAULT_N) -> list[Br
     origin, span = float(b.value[0]), _span(b)
     k = np.minimum(b.morse_index[idx], b.morse_index[idx + 1]).astype(np.int32)
     lam = (b.value - origin) / span
-    # padded to a bucket of points: one program for every count
+    # padded to a power of two (at least 2): one program for every count up to it
     brackets = padded([np.asarray(b.theta[idx]), lam[idx], np.asarray(b.theta[idx + 1]),
-                       lam[idx + 1], k], bucket(max(len(idx), 2)))
+                       lam[idx + 1], k], max(2, 1 << (len(idx) - 1).bit_length()))
     res, own, (x, phi, lam_star, mu, angle, X) = jax.device_get(_refine(
         *(jnp.asarray(a) for a in brackets), path, disc, origin, span))
     points = []

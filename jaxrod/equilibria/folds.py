@@ -25,7 +25,7 @@ from jaxrod.discretise.tail import tail_estimate
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
 from jaxrod.equilibria.record import Branch, SpecialPoint, checked
 from jaxrod.equilibria.trace import MODEL, NO_REST, check_range, trace
-from jaxrod.programs import bucket, jit, padded
+from jaxrod.programs import jit, padded
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, along
 from jaxrod.scenes.scene import Scene
@@ -74,8 +74,9 @@ def refine(scene: Scene | FileScene, b: Branch, n: int = DEFAULT_N) -> list[Fold
                     idx + 1)
     span = _span(b)
     lam0 = (b.value[pick] - origin) / span
-    # padded to a bucket of folds: one program for every count
-    x0, lam0 = padded([np.asarray(b.theta[pick]), np.asarray(lam0)], bucket(max(len(pick), 2)))
+    # padded to a power of two (at least 2): one program for every count up to it
+    size = max(2, 1 << (len(pick) - 1).bit_length())
+    x0, lam0 = padded([np.asarray(b.theta[pick]), np.asarray(lam0)], size)
     fp, rep = jax.device_get(_refine(jnp.asarray(x0), jnp.asarray(lam0), path, disc, origin,
                                      span))
     # a refinement that left the branch's range (by a tenth of it) found another fold, or

@@ -83,7 +83,9 @@ def reach_along(path: Path, start: float, stop: float, margins: dict | None = No
         return None
     gap = lambda v: path.at_host(v).clearance(margins)
     values = np.linspace(start, stop, PATH_SAMPLES)
-    gaps = np.array([gap(v) for v in values])
+    magnets = [t for t in path.template.terms if hasattr(path.template.terms[t], "centre")]
+    gaps = np.asarray(_gaps(path, jnp.asarray(values),
+                            {t: float((margins or {}).get(t, 0.0)) for t in magnets}))
     inside = np.nonzero(gaps <= 0.0)[0]
     if len(inside) == 0:
         return None
@@ -94,6 +96,17 @@ def reach_along(path: Path, start: float, stop: float, margins: dict | None = No
             break
         lo, hi = (mid, hi) if gap(mid) > 0.0 else (lo, mid)
     return float(lo)
+
+
+@jit
+def _gaps(path, values, margins):
+    """min over the magnets of |centre| - 1 - margin at each value (one vmapped program)."""
+    def gap(v):
+        scene = path.at(jnp.reshape(v, (1,)))
+        return jnp.min(jnp.stack([jnp.linalg.norm(scene.terms[t].centre()) - 1.0 - m
+                                  for t, m in margins.items()]))
+
+    return jax.vmap(gap)(values)
 
 
 #: The equilibria's model along a path (``jaxrod.scenes.path``): one for every key.
