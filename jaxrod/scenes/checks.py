@@ -33,10 +33,7 @@ def check_scene(scene, margins: dict | None = None, where: str = "") -> None:
         if not np.all(np.isfinite(np.asarray(leaf, float))):
             raise ParameterError(f"{_key(key_path)}: must be finite{at}, got {leaf}")
     margins = margins or {}
-    for name, t in scene.terms.items():
-        if not hasattr(t, "centre"):
-            continue
-        c = float(np.linalg.norm(np.asarray(t.centre())))
+    for name, c in scene.magnet_distances().items():
         if c - 1.0 - margins.get(name, 0.0) <= 0.0:
             raise ParameterError(
                 f"{name}: the magnet's centre is {c:.6g} rod lengths from the clamp{at}, "

@@ -218,9 +218,16 @@ class Scene:
         the magnet's radius, 0 by default); +inf without magnets. Negative: a magnet the
         rod can touch, where the energy is singular. Host side (concrete inputs)."""
         margins = margins or {}
-        gaps = [float(np.linalg.norm(np.asarray(t.centre()))) - 1.0 - margins.get(name, 0.0)
-                for name, t in self.terms.items() if hasattr(t, "centre")]
+        gaps = [d - 1.0 - margins.get(name, 0.0) for name, d in self.magnet_distances().items()]
         return min(gaps, default=math.inf)
+
+    def magnet_distances(self) -> dict:
+        """|centre| of every term with a ``centre()`` (a magnet), by name, in rod lengths:
+        one small program per scene structure (host side, concrete inputs)."""
+        magnets = {name: t for name, t in self.terms.items() if hasattr(t, "centre")}
+        if not magnets:
+            return {}
+        return {name: float(d) for name, d in _centre_norms(magnets).items()}
 
     def check_key(self, key: str) -> str:
         """``key`` if it names a scalar input, else a ``SceneError`` naming it."""
@@ -235,6 +242,11 @@ def _unknown(key: str, scene: Scene) -> str:
     near = difflib.get_close_matches(key, keys, n=1)
     hint = f" (did you mean {near[0]}?)" if near else ""
     return f"{key!r} is not an input of this scene{hint}; its inputs: {', '.join(keys)}"
+
+
+@jax.jit
+def _centre_norms(magnets: dict) -> dict:
+    return {name: jnp.linalg.norm(t.centre()) for name, t in magnets.items()}
 
 
 @lru_cache(maxsize=16)
