@@ -1,7 +1,7 @@
 """jaxrod: differentiable equilibria and stability of ferromagnetic Kirchhoff rods.
 
 The public API is this one flat namespace (``import jaxrod as jr``); the module tree under it
-(``jaxrod.analysis``, ``jaxrod.solvers``, ...) keeps working for deep imports but is not the
+(``jaxrod.equilibria``, ``jaxrod.solvers``, ...) keeps working for deep imports but is not the
 interface. Names are loaded on first use, so ``import jaxrod`` stays cheap (the command line
 imports only what a command needs). Importing jaxrod switches JAX to float64.
 """

@@ -21,14 +21,11 @@ LAYERS = [
     {"magnet"},
     {"three_d", "bistability", "dynamics"},
     {"inverse"},
-    {"plotting", "reproduce", "analysis"},
+    {"plotting", "reproduce"},
     {"cli"},
 ]
 #: Ground-floor units used by everything (the package's own __init__ is the public table).
 LEVEL = {unit: i for i, layer in enumerate(LAYERS) for unit in layer}
-
-#: Deprecated aliases kept for one release (``jaxrod.analysis``: old paths of moved modules).
-SHIMS = {"analysis"}
 
 
 def _unit(path: Path) -> str:
@@ -58,7 +55,7 @@ def test_no_module_imports_from_a_higher_layer():
     bad = []
     for path in sorted(ROOT.rglob("*.py")):
         unit = _unit(path)
-        if unit == "__init__" or unit in SHIMS:
+        if unit == "__init__":
             continue
         for line, target in _imported_units(ast.parse(path.read_text())):
             if target in LEVEL and LEVEL[target] > LEVEL[unit]:
@@ -86,38 +83,3 @@ def test_modules_stay_small():
     assert not big, "\n".join(big)
 
 
-def test_the_old_module_paths_still_import_with_a_deprecation_warning():
-    """Every module moved out of jaxrod.analysis imports under its old path for one release,
-    with a DeprecationWarning naming the new one, and gives the same objects."""
-    import importlib
-    import subprocess
-    import sys
-
-    from jaxrod.analysis import MOVED
-
-    code = ("import importlib, json, warnings\n"
-            "out = {}\n"
-            f"for old in {sorted(MOVED)!r}:\n"
-            "    with warnings.catch_warnings(record=True) as w:\n"
-            "        warnings.simplefilter('always')\n"
-            "        m = importlib.import_module('jaxrod.analysis.' + old)\n"
-            "    out[old] = [str(x.message) for x in w if x.category is DeprecationWarning]\n"
-            "print(json.dumps(out))\n")
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          check=True)
-    import json
-
-    said = json.loads(proc.stdout)
-    for old, new in MOVED.items():
-        assert said[old] and all(f"jaxrod.{n.strip()}" in said[old][0]
-                                 for n in new.split("+")), (old, said[old])
-    # the same objects through either path (the aliases are the new modules themselves)
-    import warnings
-
-    from jaxrod.magnet.folds import locate_folds
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        assert importlib.import_module("jaxrod.analysis.magnet").locate_folds is locate_folds
-        assert importlib.import_module("jaxrod.analysis.batch") is \
-            importlib.import_module("jaxrod.magnet.batch")

@@ -71,7 +71,7 @@ def test_import_is_lazy_and_sets_float64():
                          capture_output=True, text=True, cwd=ROOT).stdout
     x64, loaded = json.loads(out)
     assert x64 is True
-    analyses = ("jaxrod.analysis", "jaxrod.plotting", "jaxrod.uniform", "jaxrod.magnet",
+    analyses = ("jaxrod.plotting", "jaxrod.uniform", "jaxrod.magnet",
                 "jaxrod.three_d", "jaxrod.bistability", "jaxrod.inverse", "jaxrod.equilibria")
     assert not [m for m in loaded if m.startswith(analyses)]
 

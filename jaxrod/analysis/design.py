@@ -1,5 +1,0 @@
-"""Deprecated path of ``jaxrod.inverse.design`` (an alias for one release)."""
-
-from jaxrod.analysis import alias
-
-alias('design')

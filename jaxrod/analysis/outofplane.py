@@ -1,5 +1,0 @@
-"""Deprecated path of ``jaxrod.three_d.outofplane`` (an alias for one release)."""
-
-from jaxrod.analysis import alias
-
-alias('outofplane')

@@ -1,5 +1,0 @@
-"""Deprecated path of ``jaxrod.magnet.reduction`` (an alias for one release)."""
-
-from jaxrod.analysis import alias
-
-alias('reduction')
