@@ -376,8 +376,10 @@ def profile_figure(profiles: list, calibration=None):
             ax.plot(x, prof["laplace_chi2"], "--", label="Laplace")
         ax.axhline(prof["chi2_min"] + 1.0, color="0.5", lw=0.8, label=r"$\chi^2_{min}+1$")
         ax.axvline(prof["estimate"] / scale, color="0.7", lw=0.8)
-        if calibration is not None and calibration.units.get(prof["name"]):
-            unit = unit or calibration.units[prof["name"]]
+        if not unit:
+            from jaxrod.params import UNITS
+
+            unit = "deg" if prof["name"] == "offset" else UNITS.get(prof["name"], "")
         ax.set_xlabel(f"{prof['name']}" + (f" ({unit})" if unit else ""))
         ax.set_ylabel(r"$\chi^2$")
     axes[0][0].legend(fontsize=8)

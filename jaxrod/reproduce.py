@@ -384,7 +384,7 @@ def richer_models(sigma_deg: float = 1.0) -> list:
                     "priors": {n: list(RICHER_PRIORS[n]) for n in priors},
                     "estimates": cal.estimates, "std": cal.std, "chi2": cal.chi2,
                     "dof": cal.dof, "reduced_chi2": cal.reduced_chi2,
-                    "residuals_deg": cal.residuals_deg, "converged": cal.converged})
+                    "residuals_deg": cal.residuals, "converged": cal.converged})
     return out
 
 

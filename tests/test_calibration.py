@@ -1,23 +1,26 @@
-"""Multi-parameter calibration and inverse design (analysis/calibration, fit, design).
+"""Multi-parameter calibration and inverse design of the paper's experiment (the generic
+fit on its rig: jaxrod.inverse.scene_fit, fit, design).
 
-Synthetic angles come from ``locate_folds`` (continuation from the straight rod and
-Moore-Spence at N = 16), independent of the calibration's warm-started fold model (N = 12).
+Synthetic angles come from ``locate_folds`` (the paper's scene, continuation from the
+straight rod and Moore-Spence at N = 16), independent of the fit's warm-started fold model
+on the rig file (N = 12).
 """
 
 from __future__ import annotations
 
 import math
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 from figure_checks import check_figure
 
 from jaxrod.design_point import DesignPoint
-from jaxrod.discretise.planar import planar_discretisation
-from jaxrod.inverse import calibration
+from jaxrod.equilibria.folds import folds as fresh_folds
+from jaxrod.inverse import scene_fit
 from jaxrod.inverse.design import design
-from jaxrod.inverse.fit import Prior, _problem, default_point, fit, profile
+from jaxrod.inverse.fit import KEYS, Prior, default_point, fit, profile, rig_of
 from jaxrod.magnet.diagram import make_scene
 from jaxrod.magnet.folds import locate_folds
 from jaxrod.params import ParameterError
@@ -52,38 +55,32 @@ def test_hidden_parameters_recovered_from_exact_angles(hidden, free):
         # exact data pin the point, but the magnet's strength M_s a^3 and E enter the angles
         # almost only through M ~ M_s a^3 / E and G ~ 1 / E: at sigma = 1 degree the angles
         # leave one combination free to a factor e^10, and neither gets a deviation
-        loose = [e for e in cal.identifiability if not e["fixed_by_angles"]]
+        loose = [e for e in cal.identifiability if not e["fixed_by_data"]]
         assert len(loose) == 1 and set(loose[0]["combination"]) == {"E"} | magnet
         assert cal.std["E"] is None
     else:
-        assert all(e["fixed_by_angles"] for e in cal.identifiability)
+        assert all(e["fixed_by_data"] for e in cal.identifiability)
         assert all(cal.std[n] is not None for n in free)
 
 
-def test_chain_rule_jacobian_matches_central_differences():
-    """The calibration's Jacobian (folds differentiated in G, M, D only, the groups in p by
-    forward mode) against central differences of the model angles."""
-    point = default_point()
-    free = ("E", "remanence", "track-radius", "length", "offset")
-    problem = _problem(point, np.array([-25.0, 38, 24, -42]), np.ones(4, bool), 1.0, free,
-                       {"remanence": Prior(8e5, 4e4)}, {})
-    disc = planar_discretisation(calibration.MODEL_N, "clamped")
-    values, _ = calibration.values_of(problem, problem.p_start)
-    scene, _ = calibration._scene("physical", problem, values)
-    z, found = calibration.start_states(scene, disc)
-    assert bool(found)
-    p = jnp.zeros(10).at[0].set(0.05).at[6].set(-0.03).at[9].set(0.4)
-    r, J, _, ok = calibration.evaluate("physical", problem, p, z, disc)
-    assert bool(ok)
-    names = calibration.parameter_names("physical")
-    h = 1e-6
-    for name in free:
-        i = names.index(name)
-        e = jnp.zeros(10).at[i].set(h)
-        plus = calibration.residuals("physical", problem, p + e, z, disc)[0]
-        minus = calibration.residuals("physical", problem, p - e, z, disc)[0]
-        fd = (np.asarray(plus) - np.asarray(minus)) / (2 * h)
-        assert np.allclose(np.asarray(J[:, i]), fd, rtol=1e-6, atol=1e-6), name
+def test_fold_derivatives_match_central_differences_of_fresh_continuations():
+    """The fit's fold model differentiated in the rig's numbers (forward mode through the
+    implicitly differentiated Moore-Spence solves) against central differences of the folds
+    found afresh (continuation from the straight rod) at each perturbed rig."""
+    scene, angle, span, _, _ = rig_of(default_point())
+    keys = [KEYS[n][0] for n in ("E", "remanence", "track-radius", "length")]
+    problem, path = scene_fit._prepare(scene, angle, span, [1.0, 1.0], keys, 1.0, None, 12,
+                                       None, False, None)
+    a = problem.arrays
+    p = np.array(path.start[1:])
+    J = jax.jacfwd(lambda q: scene_fit.fold_values(a["path"], a["disc"], a["origin"],
+                                                   a["span"], q, a["z0"])[0])(jnp.asarray(p))
+    for j, key in enumerate(keys):
+        h = 1e-5 * p[j]
+        at = lambda v: [f.value for f in fresh_folds(scene_fit.with_values(scene, {key: v}),
+                                                     angle, *span, n=12)]
+        fd = (np.array(at(p[j] + h)) - np.array(at(p[j] - h))) / (2 * h)
+        assert np.allclose(np.asarray(J[:, j]), fd, rtol=1e-6), key
 
 
 def test_unidentifiable_combination_is_flagged_not_given_a_std():
@@ -97,7 +94,7 @@ def test_unidentifiable_combination_is_flagged_not_given_a_std():
     cal = fit(measured, free)
     assert cal.std["E"] is None and cal.std["remanence"] is None
     assert cal.std["offset"] is not None and cal.std["track-radius"] is not None
-    loose = [e for e in cal.identifiability if not e["fixed_by_angles"]]
+    loose = [e for e in cal.identifiability if not e["fixed_by_data"]]
     assert len(loose) == 1 and set(loose[0]["combination"]) >= {"E", "remanence"}
     assert any("cannot tell apart" in w for w in cal.warnings)
     with_prior = fit(measured, free, priors={"remanence": Prior(8e5, 4e4)})

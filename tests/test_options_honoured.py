@@ -9,11 +9,11 @@ import numpy as np
 from jaxrod.bistability import design_map
 from jaxrod.bistability.design_map import read_store
 from jaxrod.cli import BATCH_N, main
-from jaxrod.inverse import calibration
+from jaxrod.inverse import fit
 
 
 def test_the_command_line_default_is_the_programs_default():
-    assert BATCH_N == design_map.MAP_N == calibration.MODEL_N
+    assert BATCH_N == design_map.MAP_N == fit.MODEL_N
 
 
 def _map(tmp_path, capsys, *extra):

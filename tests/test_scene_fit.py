@@ -124,5 +124,5 @@ def test_the_generic_fit_of_the_papers_scene_agrees_with_the_papers_fit():
     relative_std = generic.std["magnet.M"] / generic.estimates["magnet.M"]
     paper_std = paper.std["remanence"] / paper.estimates["remanence"]
     assert abs(relative_std / (math.sqrt(2.0) * paper_std) - 1.0) <= 1e-9
-    assert np.allclose(np.degrees(generic.folds), [paper.model_deg[1], paper.model_deg[2]],
+    assert np.allclose(np.degrees(generic.folds), [paper.model[1], paper.model[2]],
                        atol=1e-9, rtol=0)

@@ -34,7 +34,7 @@ from jaxrod.params import GROUP_NAMES, PHYSICAL_NAMES, UNITS, Magnet, ParameterE
 
 
 def _measured_from_args(args) -> list:
-    from jaxrod.inverse.calibration import ANGLE_NAMES
+    from jaxrod.inverse.fit import ANGLE_NAMES
 
     named = [getattr(args, name) for name in ANGLE_NAMES]
     if args.angles is not None:
@@ -73,8 +73,7 @@ def _physical_point(args):
 
 
 def cmd_fit(args) -> int:
-    from jaxrod.inverse.calibration import ANGLE_NAMES
-    from jaxrod.inverse.fit import FREE_NAMES, OFFSET, Prior, fit, profile
+    from jaxrod.inverse.fit import ANGLE_NAMES, FREE_NAMES, OFFSET, Prior, fit, profile
 
     if uses_scene_file(args):
         return fit_on_file(args)
@@ -110,7 +109,8 @@ def cmd_fit(args) -> int:
     inputs["sigma-deg"] = _entry(args.sigma_deg, "deg", "given" if args.sigma_given
                                  else "default")
     cal = fit(measured, free, point, priors, args.sigma_deg, bounds)
-    out = cal.as_dict() | {"inputs": inputs} | _legacy_keys(cal)
+    units = {n: "deg" if n == OFFSET else UNITS[n] for n in cal.free}
+    out = cal.as_dict() | {"units": units, "inputs": inputs} | _legacy_keys(cal)
     profiles = []
     if args.profile:
         profiles = [profile(measured, name, free, point, priors, args.sigma_deg, fitted=cal)
@@ -126,7 +126,7 @@ def cmd_fit(args) -> int:
         print(json.dumps(out))
     else:
         print(_inputs_line(inputs))
-        _print_calibration(cal, ANGLE_NAMES)
+        _print_calibration(cal, ANGLE_NAMES, units)
         if out_dir is not None:
             print(f"wrote {out_dir / 'fit.json'}" + (", profile.png" if profiles else ""))
     if not cal.converged:
@@ -134,21 +134,21 @@ def cmd_fit(args) -> int:
     return 0 if cal.converged else 1
 
 
-def _print_calibration(cal, angle_names) -> None:
+def _print_calibration(cal, angle_names, units) -> None:
     if not cal.converged:
         print(f"NOT CONVERGED after {cal.iterations} iterations: {cal.reason}")
         print("last iterate (not an estimate): " + ", ".join(
-            f"{n} = {v:.6g} {cal.units[n]}" for n, v in cal.estimates.items()))
+            f"{n} = {v:.6g} {units[n]}" for n, v in cal.estimates.items()))
         for w in cal.warnings:
             if "signs" in w:
                 print(f"hint: {w}")
         return
-    priors = ", ".join(f"{n} = {p.mean:.6g} +- {p.sd:.3g} {cal.units.get(n, '')}"
+    priors = ", ".join(f"{n} = {p.mean:.6g} +- {p.sd:.3g} {units.get(n, '')}"
                        for n, p in cal.priors.items())
     print(f"free: {', '.join(cal.free)}" + (f"; priors: {priors}" if priors else "")
-          + f"; sigma = {cal.sigma_deg:g} deg per angle")
+          + f"; sigma = {cal.sigma:g} deg per angle")
     for n, v in cal.estimates.items():
-        scale, unit = (1e9, "GPa") if n == "E" else (1.0, cal.units[n])
+        scale, unit = (1e9, "GPa") if n == "E" else (1.0, units[n])
         sd = cal.std[n]
         spread = (f"+- {sd / scale:.6g}" if sd is not None else
                   "(no standard deviation: not fixed by the angles and priors)")
@@ -158,7 +158,7 @@ def _print_calibration(cal, angle_names) -> None:
             f"{a}/{b} {cal.correlation[i, j]:+.3f}" for i, a in enumerate(cal.free)
             for j, b in enumerate(cal.free) if j > i and math.isfinite(cal.correlation[i, j])))
     print("residuals (model - measured):")
-    for name, r in zip(angle_names, cal.residuals_deg):
+    for name, r in zip(angle_names, cal.residuals):
         if r is not None:
             print(f"  {name:12s} {r:+.4f} deg")
     red = "undefined (no degree of freedom)" if cal.reduced_chi2 is None else \
@@ -166,7 +166,7 @@ def _print_calibration(cal, angle_names) -> None:
     print(f"chi^2 = {cal.chi2:.4g} (angles and priors), {cal.dof} degrees of freedom, "
           f"reduced chi^2 = {red} (~1 when sigma is right)")
     for e in cal.identifiability:
-        print(("the angles fix " if e["fixed_by_angles"] else "the angles CANNOT fix ")
+        print(("the angles fix " if e["fixed_by_data"] else "the angles CANNOT fix ")
               + e["combination_text"]
               + (f" (std {e['std']:.3g})" if e["std"] is not None else ""))
     for w in cal.warnings:
@@ -233,14 +233,14 @@ def cmd_design(args) -> int:
                   "inputs, or fix the others, for isolated designs)")
         for i, d in enumerate(result.designs):
             values = ", ".join(f"{n} = {v:.10g} {UNITS[n]}".rstrip() for n, v in d.values.items())
-            check = (f"locate_folds: {d.verified_capture_deg:.10f} / "
+            check = (f"fresh continuation: {d.verified_capture_deg:.10f} / "
                      f"{d.verified_release_deg:.10f} deg" if d.verified_capture_deg is not None
                      else d.check)
             print(f"design {i + 1}: {values}  (model folds {d.capture_deg:.10f} / "
                   f"{d.release_deg:.10f} deg; {check}; verified: {d.verified})")
     ok = bool(result.designs) and result.designs[0].verified
     if not ok:
-        _not_converged("design", "the fresh locate_folds at the design disagrees with the "
+        _not_converged("design", "the fresh continuation at the design disagrees with the "
                        "model's folds")
     return 0 if ok else 1
 

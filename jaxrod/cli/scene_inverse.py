@@ -36,7 +36,7 @@ def _legacy_keys(cal) -> dict:
 
     flat = fit_result(cal, "offset" in cal.free)
     return {k: flat[k] for k in ("E_Pa", "E_std_Pa", "offset_deg", "offset_std_deg",
-                                 "warning")}
+                                 "residuals_deg", "warning")}
 
 
 def _free_and_bounds(args, file):

@@ -4,34 +4,29 @@
 The targets are the folds of the planar branch, alpha_lower = capture and alpha_upper =
 release (a sweep of increasing magnet angle captures the rod at -alpha_lower and releases
 it at alpha_upper; the offset is zero). The inputs named in ``vary`` are solved for by the
-least-squares program of ``jaxrod.inverse.calibration`` (optax L-BFGS with an Armijo line
-search over relative log changes of the inputs, folds implicitly differentiated) with the
-four angles as data, within bounds; the line search rejects every trial point where the
-magnet could touch the rod, a group leaves its valid range or the diagram has no two folds
-(only bistable designs). The program starts from the given point and from a grid of
-points inside the bounds, so that separate solutions are each found; every solution is
-verified by a fresh ``locate_folds`` (continuation from the straight rod and Moore-Spence)
-at the answer.
+generic design (``jaxrod.inverse.scene_fit.design_folds``: the fit's least-squares program
+with the four angles as targets, on the shipped rig or the paper's scene of the groups,
+``jaxrod.inverse.fit.rig_of``) within bounds; its line search rejects every trial point
+where the magnet would touch the rod, an input leaves its bounds or the branch has no two
+folds (only bistable designs). It starts from the given point and from a grid of points
+inside the bounds, so that separate solutions are each found; every solution is verified
+by a fresh continuation from the straight rod and Moore-Spence (``jaxrod.folds``) at the
+answer.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import math
 
 import numpy as np
 
 from jaxrod.design_point import DesignPoint, range_of
-from jaxrod.inverse.calibration import MODEL_N, OFFSET, parameter_names, solve_program
-from jaxrod.inverse.fit import _check_bounds, _check_names, _problem
-from jaxrod.magnet.diagram import make_scene
-from jaxrod.magnet.folds import locate_folds
+from jaxrod.inverse.fit import MODEL_N, OFFSET, READOUT, _check_names, check_bounds, rig_of
+from jaxrod.inverse.scene_fit import design_folds, with_values
 from jaxrod.params import UNITS, ParameterError, check_degree, check_value
 
-#: A design hits its targets when the model's folds lie within this of them (degrees).
-HIT_DEG = 1e-6
-#: The fresh ``locate_folds`` at a design must agree with the model's folds to this (deg).
+#: The fresh continuation at a design must agree with the model's folds to this (deg).
 VERIFY_DEG = 1e-6
 #: Default bounds of a varied input: a factor of this either side of its given value.
 DEFAULT_FACTOR = 3.0
@@ -40,7 +35,7 @@ DEFAULT_FACTOR = 3.0
 @dataclasses.dataclass(frozen=True)
 class Design:
     """One design: the varied inputs' values, the folds reached by the model and by the
-    independent check (``locate_folds``), and whether both hit the targets."""
+    independent check (a fresh continuation), and whether both hit the targets."""
 
     values: dict
     capture_deg: float
@@ -125,24 +120,6 @@ def default_bounds(point: DesignPoint, vary) -> dict:
     return out
 
 
-def _starts(point: DesignPoint, vary, bounds, per_axis: int) -> list[np.ndarray]:
-    """The given point and a grid of per_axis^k points inside the bounds (log-spaced)."""
-    names = parameter_names(point.kind)
-    starts = [np.zeros(len(names))]
-    axes = []
-    for name in vary:
-        lo, hi = bounds[name]
-        v0 = point.values[point.index(name)]
-        fractions = (np.arange(per_axis) + 0.5) / per_axis
-        axes.append(np.log(lo / v0) + fractions * np.log(hi / lo))
-    for combo in itertools.product(*axes):
-        p = np.zeros(len(names))
-        for name, u in zip(vary, combo):
-            p[names.index(name)] = u
-        starts.append(p)
-    return starts
-
-
 def design(point: DesignPoint, capture_deg: float, release_deg: float, vary,
            bounds: dict | None = None, starts_per_axis: int = 3,
            n: int = MODEL_N) -> DesignResult:
@@ -151,7 +128,7 @@ def design(point: DesignPoint, capture_deg: float, release_deg: float, vary,
     ``point``: the design to start from and the values of the inputs not varied (groups
     or physical); ``vary``: the inputs to solve for (names of ``point``); ``bounds``: name
     -> (lo, hi) (default ``default_bounds``); ``n``: the Chebyshev degree of the model's
-    folds (each design is verified by ``locate_folds`` at max(n, 16)). Raises ParameterError
+    folds (each design is verified by a fresh continuation at max(n, 16)). Raises ParameterError
     when no bistable design within the bounds reaches the targets (the closest found is in
     the message).
 
@@ -165,7 +142,7 @@ def design(point: DesignPoint, capture_deg: float, release_deg: float, vary,
         raise ParameterError("vary: name at least one input to solve for")
     if OFFSET in vary:
         raise ParameterError("vary: the offset is not a design input")
-    given = _check_bounds(dict(bounds or {}), point)
+    given = check_bounds(dict(bounds or {}), point.names)
     unknown = [n for n in given if n not in vary]
     if unknown:
         raise ParameterError(f"bounds: {', '.join(unknown)} not varied (vary: "
@@ -186,67 +163,62 @@ def design(point: DesignPoint, capture_deg: float, release_deg: float, vary,
         for n in vary:
             values[point.index(n)] = math.sqrt(bounds[n][0] * bounds[n][1])
         point = dataclasses.replace(point, values=tuple(values))
-    measured = np.array([-capture, release, capture, -release])
-    mask = np.ones(4, bool)
-    found, closest = [], None
-    starts = _starts(point, vary, bounds, starts_per_axis)
-    names = parameter_names(point.kind)
-    for p in starts:
-        problem = _problem(point, measured, mask, 1.0, vary, {}, bounds, p)
-        sol = solve_program(point.kind, problem, n=degree)
-        model = np.asarray(sol.angles)
-        miss = float(np.max(np.abs(model - measured)))
-        values = point.values * np.exp(np.asarray(sol.result.p)[:-1])
-        candidate = ({n: float(values[names.index(n)]) for n in vary}, model, miss,
-                     bool(sol.result.converged) and bool(sol.found), int(sol.result.iterations))
-        if bool(sol.found) and (closest is None or miss < closest[2]):
-            closest = candidate
-        if candidate[3] and miss <= HIT_DEG and not any(
-                all(abs(candidate[0][n] / d[0][n] - 1.0) < 1e-6 for n in vary) for d in found):
-            found.append(candidate)
+    scene, angle, span, degrees, keys = rig_of(point)
+    outcomes = design_folds(
+        scene, angle, span, np.array([-capture, release, capture, -release]) / degrees,
+        [keys[n][0] for n in vary], {keys[n][0]: (lo / keys[n][1], hi / keys[n][1])
+                                     for n, (lo, hi) in bounds.items()},
+        n=degree, readout=READOUT, starts=starts_per_axis)
+    values = lambda d: {n: d.estimates[keys[n][0]] * keys[n][1] for n in vary}
+    found = [d for d in outcomes if d.converged]
     if not found:
-        raise ParameterError(_infeasible(capture, release, vary, bounds, closest))
-    designs = [_verified(point, c, capture, release, max(degree, 16)) for c in found]
+        raise ParameterError(_infeasible(capture, release, vary, bounds, outcomes[:1],
+                                         values, degrees))
+    designs = [_verified(scene, angle, span, keys, values(d), d, degrees, capture, release,
+                         max(degree, 16)) for d in found]
     designs.sort(key=lambda d: (not d.verified, _distance(point, d.values)))
-    return DesignResult(capture, release, vary, bounds, designs, len(starts), point, degree,
-                        max(degree, 16))
+    return DesignResult(capture, release, vary, bounds, designs,
+                        1 + starts_per_axis ** len(vary), point, degree, max(degree, 16))
 
 
 def _distance(point: DesignPoint, values: dict) -> float:
     return sum(math.log(v / point.values[point.index(n)]) ** 2 for n, v in values.items())
 
 
-def _verified(point: DesignPoint, candidate, capture, release, degree: int) -> Design:
-    values, model, _, converged, iterations = candidate
-    at = point
-    for n, v in values.items():
-        at = at.replace(n, v)
-    G, M, D = at.groups()
-    report = locate_folds(make_scene(G, M, D, at.radius()), n=degree)
-    folds = [f.alpha_deg for f in report.folds] if len(report.folds) == 2 else None
+def _verified(scene, angle, span, keys, values, fit, degrees, capture, release,
+              degree: int) -> Design:
+    """The design checked by a fresh continuation from the straight rod at N = ``degree``
+    (the folds along the magnet's angle: the upper met first, then the lower)."""
+    from jaxrod.equilibria.folds import folds as fresh_folds
+
+    at = with_values(scene, {keys[n][0]: v / keys[n][1] for n, v in values.items()})
+    report = fresh_folds(at, angle, *span, n=degree, throw=False)
+    angles = [f.value * degrees for f in report]
+    folds = sorted(angles) if len(report) == 2 else None
     check = None
     if folds is None:
-        angles = ", ".join(f"{f.alpha_deg:.6g}" for f in report.folds)
-        check = (f"locate_folds finds {len(report.folds)} folds on the branch through the "
-                 f"straight rod ({angles} deg), not two: the sweep's capture and release are "
-                 "not the model's pair of folds" if report.folds else
-                 "locate_folds finds no fold on the branch through the straight rod")
-    verified = (folds is not None and report.converged
+        listed = ", ".join(f"{a:.6g}" for a in angles)
+        check = (f"a fresh continuation finds {len(report)} folds on the branch through the "
+                 f"straight rod ({listed} deg), not two: the sweep's capture and release are "
+                 "not the model's pair of folds" if report else
+                 "a fresh continuation finds no fold on the branch through the straight rod")
+    verified = (folds is not None and all(f.converged for f in report)
                 and abs(folds[0] - capture) <= VERIFY_DEG
                 and abs(folds[1] - release) <= VERIFY_DEG)
-    return Design(values=values, capture_deg=float(model[2]), release_deg=float(model[1]),
+    return Design(values=values, capture_deg=float(fit.model[2] * degrees),
+                  release_deg=float(fit.model[1] * degrees),
                   verified_capture_deg=None if folds is None else folds[0],
                   verified_release_deg=None if folds is None else folds[1],
-                  converged=converged, verified=verified, iterations=iterations, check=check)
+                  converged=fit.converged, verified=verified, iterations=fit.iterations,
+                  check=check)
 
 
-def _infeasible(capture, release, vary, bounds, closest) -> str:
+def _infeasible(capture, release, vary, bounds, closest, values, degrees) -> str:
     box = ", ".join(f"{n} in [{lo:.6g}, {hi:.6g}]" for n, (lo, hi) in bounds.items())
     text = (f"capture/release: no bistable design with {box} has its folds at "
             f"{capture:g} and {release:g} deg")
-    if closest is not None:
-        values, model, _, _, _ = closest
-        at = ", ".join(f"{n} = {v:.6g}" for n, v in values.items())
-        text += (f"; the closest reached capture {model[2]:.4g} and release {model[1]:.4g} "
-                 f"deg at {at}")
+    if closest:
+        at = ", ".join(f"{n} = {v:.6g}" for n, v in values(closest[0]).items())
+        text += (f"; the closest reached capture {closest[0].model[2] * degrees:.4g} and "
+                 f"release {closest[0].model[1] * degrees:.4g} deg at {at}")
     return text + " (widen the bounds, vary other inputs, or move the targets)"

@@ -1,25 +1,38 @@
-"""Fits and designs on any scene: the inputs whose folds sit at measured (or target) values.
+"""Fits and designs on any scene or rig: the inputs whose folds sit at measured (or target)
+values, with priors, bounds, an offset of the data, batches and profiles.
 
-The data are the folds met along one input v (``vary``) over a range, in the order met
-(``jaxrod.equilibria.folds``): measured switching values (the field angle where a robot
-snaps, the rail position where a wire is captured), NaN where one was not measured. The free
-inputs p (any scalar inputs of the scene, by key) minimise
+The folds f_k(p) are those met along one input v (``vary``) over a range, in the order met
+(``jaxrod.equilibria.folds``). Datum i measures one of them, with a sign (a mirrored sweep
+of a symmetric rig sees -f_k), and every datum may share an unknown offset delta of the
+scale v is read on (a misaligned track):
 
-    0.5 sum_i ((f_i(p) - m_i) / sigma)^2,
+    model_i(p, delta) = s_i f_{k_i}(p) + delta        (``readout`` = ((k_i, s_i), ...)).
 
-f_i(p) the i-th fold's value, by the least-squares program of ``jaxrod.solvers.least_squares``
-(optax L-BFGS direction, Armijo line search, Gauss-Newton scaling). Each evaluation solves
+The free inputs p (any inputs of a scene by key, any numbers of a rig by file key) and
+delta (``OFFSET``, when ``offset`` is True) minimise half of
+
+    chi^2 = sum_i ((model_i - m_i) / sigma)^2 + sum_j ((p_j - mean_j) / sd_j)^2,
+
+the second sum over the free inputs with a Gaussian ``Prior``, by the least-squares program
+of ``jaxrod.solvers.least_squares`` (optax L-BFGS direction, Armijo line search,
+Gauss-Newton scaling, so that inputs of any size are stepped alike). Each evaluation solves
 each fold's Moore-Spence system from the fold states of the last accepted point, implicitly
 differentiated in p (``differentiable_fold``); a trial point where a solve fails, a fold
-leaves the range or the folds change their order, or p leaves its bounds, is rejected. The
-start's folds come from ``jaxrod.equilibria.folds`` (the branch from the ramped equilibrium).
-The standard deviations follow from the Gauss-Newton covariance sigma^2 (J^T J)^-1 at the
-answer. A design is the same fit with the targets as data (``design_folds``).
+leaves the range, the folds change their order, p leaves its bounds or a magnet enters the
+rod's reach is rejected. One compiled program per (scene structure, number of inputs, data,
+N) serves every choice of keys, data, priors, bounds and which inputs are held
+(``profile``) or batched (``fit_batch``).
+
+The record (``SceneFit``, ``jaxrod.inverse.fit_record``) carries the Laplace covariance,
+the identifiability of the inputs from the data and warnings. A design is the same fit
+with the targets as data (``design_folds``), from the scene and, optionally, a grid of
+starts within the bounds.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import jax
@@ -29,146 +42,413 @@ import numpy as np
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise
 from jaxrod.equilibria.folds import folds as scene_folds
 from jaxrod.equilibria.trace import MODEL, check_range
-from jaxrod.params import ParameterError
+from jaxrod.inverse.fit_record import OFFSET, Prior, SceneFit, record
+from jaxrod.params import ParameterError, check_value
 from jaxrod.programs import jit
-from jaxrod.scenes.files import FileScene
-from jaxrod.scenes.path import along
+from jaxrod.progress import Interrupted, progress_bar
+from jaxrod.scenes.files import FileScene, apply_settings, scene_from
+from jaxrod.scenes.path import PROBE, along
 from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.folds import differentiable_fold
 from jaxrod.solvers.least_squares import forward_mode, least_squares_run
 from jaxrod.status import Status
 
+# --- the program ----------------------------------------------------------------------------
 
-@dataclasses.dataclass(frozen=True)
-class SceneFit:
-    """The answer of ``fit_folds`` / ``design_folds``.
-
-    ``estimates`` and ``std`` (one standard deviation from the Gauss-Newton covariance, in
-    the inputs' units; None for a design) by key; ``folds``: the model's fold values at the
-    answer, in the order met; ``residuals``: folds - data (None where no datum);
-    ``converged``, ``iterations``, ``status`` (a ``jaxrod.Status``) and ``reason``.
-    """
-
-    free: tuple[str, ...]
-    estimates: dict
-    std: dict | None
-    folds: list
-    residuals: list
-    chi2: float
-    converged: bool
-    iterations: int
-    status: Status
-    reason: str | None
-
-    def as_dict(self) -> dict:
-        return {"free": list(self.free), "estimates": self.estimates, "std": self.std,
-                "folds": self.folds, "residuals": self.residuals, "chi2": self.chi2,
-                "converged": self.converged, "iterations": self.iterations,
-                "status": self.status.name.lower(), "reason": self.reason}
-
-
-def _program(path, disc, origin, span, z0, p0, data, mask, sigma, lower, upper, max_iter):
-    model = MODEL
+def fold_values(path, disc, origin, span, p, z):
+    """The folds' values at the path's inputs p (after ``vary``) from fold states z
+    (K, 2m + 1) at nearby inputs: (values, new states, each solve converged); implicitly
+    differentiable in p (``differentiable_fold``)."""
     m = disc.size
+    z_new, stats = jax.vmap(lambda zi: differentiable_fold(
+        MODEL, zi[:m], zi[-1], zi[m:2 * m], (path, disc, origin, span, p)))(z)
+    return origin + span * z_new[:, -1], z_new, jnp.all(stats[:, 0] == 1.0)
 
-    def residuals(p, z):
-        args = (path, disc, origin, span, p)
-        z_new, stats = jax.vmap(lambda zi: differentiable_fold(
-            model, zi[:m], zi[-1], zi[m:2 * m], args))(z)
+
+def _program(path, disc, origin, span, z0, p0, free, data, mask, sigma, which, sign,
+             prior_mean, prior_scale, lower, upper, magnets, max_iter):
+    """p = (the path's inputs after ``vary``, the offset): the least-squares answer (in the
+    scaled parameters x = p / |p0|, so that inputs of any size start alike; 1 for an entry
+    at zero), the folds' values there and the covariance of x. ``magnets``: (term name ->
+    (margin at p0, exponents)) for the clearance."""
+    p_start = p0
+    unit = jnp.where(p0 == 0.0, 1.0, jnp.abs(p0))
+
+    def clear(p, v):
+        """Every magnet beyond the rod's reach at the input value v."""
+        scene = path.at(jnp.concatenate([jnp.reshape(v, (1,)), p[:-1]]))
+        gaps = [jnp.linalg.norm(scene.terms[t].centre()) - 1.0
+                - margin * jnp.prod((p[:-1] / p_start[:-1]) ** k)
+                for t, (margin, k) in magnets.items()]
+        return jnp.all(jnp.stack(gaps) > 0.0) if gaps else jnp.asarray(True)
+
+    def residuals(x, z):
+        p = x * unit
+        values, z_new, ok = fold_values(path, disc, origin, span, p[:-1], z)
         lam = z_new[:, -1]
-        ok = jnp.all(stats[:, 0] == 1.0) & jnp.all((lam >= -1e-9) & (lam <= 1.0 + 1e-9)) \
-            & jnp.all(jnp.diff(lam) * jnp.sign(jnp.diff(z[:, -1])) > 0.0) \
-            & jnp.all((p >= lower) & (p <= upper))
-        values = origin + span * lam
-        r = jnp.where(mask, (values - data) / sigma, 0.0)
-        return r, z_new, ok
+        ok = ok & jnp.all((lam >= -1e-9) & (lam <= 1.0 + 1e-9)) \
+            & jnp.all(jnp.diff(lam) * jnp.sign(jnp.diff(z0[:, -1])) > 0.0) \
+            & jnp.all(~free | ((p >= lower) & (p <= upper))) \
+            & jnp.all(jax.vmap(lambda v: clear(p, v))(values))
+        model = sign * values[which] + p[-1]
+        r = jnp.where(mask, (model - data) / sigma, 0.0)
+        return jnp.concatenate([r, (p - prior_mean) * prior_scale]), z_new, ok
 
-    free_mask = jnp.ones(p0.shape[0], bool)
-    res = least_squares_run(forward_mode(residuals), p0, z0, free_mask, data.shape[0], True,
-                            max_iter)
-    return res, origin + span * res.aux[:, -1], res.covariance(free_mask)
+    res = least_squares_run(forward_mode(residuals), p0 / unit, z0, free,
+                            data.shape[0] + p0.shape[0], True, max_iter)
+    return res._replace(p=res.p * unit, J=res.J / unit), origin + span * res.aux[:, -1]
 
 
 _fit_program = jit(_program, static_argnames=("max_iter",))
 
 
-def fit_folds(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float], measured,
-              free, sigma: float = 1.0, bounds: dict | None = None, n: int = DEFAULT_N,
-              max_iter: int = 60, design: bool = False) -> SceneFit:
-    """Fit the inputs ``free`` (scene keys) so that the folds met along ``vary`` over
-    ``vary_range`` sit at ``measured`` (in the order met; NaN where not measured), each with
-    standard deviation ``sigma`` (module docstring). ``bounds``: key -> (lo, hi) (default
-    unbounded); the scene's values of the free inputs are the start.
-    """
+@jit(static_argnames=("max_iter",))
+def _batch_program(path, disc, origin, span, z0, p0, free, data, mask, sigma, which, sign,
+                   prior_mean, prior_scale, lower, upper, magnets, max_iter):
+    """``_program`` of each row of ``data`` and ``mask`` (vmapped)."""
+    return jax.vmap(lambda d, mk: _program(
+        path, disc, origin, span, z0, p0, free, d, mk, sigma, which, sign, prior_mean,
+        prior_scale, lower, upper, magnets, max_iter))(data, mask)
+
+
+# --- a problem, prepared on the host -------------------------------------------------------
+
+@dataclasses.dataclass(frozen=True)
+class _Problem:
+    keys: tuple            # the path's inputs after vary (free and held)
+    free: tuple            # the free names (keys and the offset)
+    arrays: dict           # the program's arguments but data and mask
+    data: np.ndarray
+    mask: np.ndarray
+    n_data: int
+    n_priors: int
+    priors: dict
+    span_abs: float
+
+
+def with_values(scene, values: dict):
+    """``scene`` (a ``Scene`` or a rig read from a file) with inputs set by key (a rig's
+    numbers by file key, or its scene's inputs)."""
+    if isinstance(scene, FileScene):
+        inner = scene.scene.inputs() + ["load_scale"]
+        rig = scene_from(apply_settings(scene.data, [f"{k}={float(v)!r}" for k, v in
+                                                     values.items() if k not in inner]))
+        values = {k: v for k, v in values.items() if k in inner}
+        return dataclasses.replace(rig, scene=with_values(rig.scene, values)) \
+            if values else rig
+    for k, v in values.items():
+        scene = scene.replace(k, float(v))
+    return scene
+
+
+def _magnets(scene, keys, start) -> dict:
+    """term name -> (the magnet's radius in rod lengths at ``start``, its exponents in the
+    keys): a rig's magnet radius d / (2 L) moves with the rig's numbers; a scene's magnets
+    are points."""
+    margins = getattr(scene, "margins", {}) or {}
+    names = [t for t, term in (scene.scene if isinstance(scene, FileScene) else scene)
+             .terms.items() if hasattr(term, "centre")]
+    out = {}
+    for t in names:
+        margin = float(margins.get(t, 0.0))
+        k = np.zeros(len(keys))
+        if margin > 0.0:
+            for j, key in enumerate(keys):
+                if key in scene.scene.inputs() + ["load_scale"]:
+                    continue
+                up = with_values(scene, {key: start[j] * PROBE}).margins.get(t, margin)
+                k[j] = round(math.log(up / margin) / math.log(PROBE))
+        out[t] = (margin, k)
+    return out
+
+
+#: The host work of a start (its path, its folds, its magnets), kept for the fits that
+#: follow from the same scene: a calibration of many data sets at one point prepares once.
+_STARTS: dict = {}
+
+
+def _remembered(key, make):
+    """``make()``, kept under ``key`` (the last 16)."""
+    if key not in _STARTS:
+        if len(_STARTS) >= 16:
+            _STARTS.pop(next(iter(_STARTS)))
+        _STARTS[key] = make()
+    return _STARTS[key]
+
+
+def _identity(scene) -> tuple:
+    """What a scene (or rig) is, as a hashable key: its file, or its structure and values."""
+    if isinstance(scene, FileScene):
+        import json
+
+        return ("file", json.dumps(scene.data, sort_keys=True, default=str),
+                _identity(scene.scene))
+    leaves, treedef = jax.tree_util.tree_flatten(scene)
+    return (str(treedef), tuple(np.asarray(v, np.float64).tobytes() for v in leaves))
+
+
+def _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n, readout, offset,
+             priors, hold=(), z0=None) -> tuple[_Problem, object]:
     start, stop = check_range(scene, vary, *vary_range)
-    free = tuple(free)
-    if not free:
+    free, hold = tuple(free), tuple(hold)
+    if not free and not offset:
         raise ParameterError("free: name at least one input to fit")
-    for key in free:
+    for key in free + hold:
         if key == vary:
             raise ParameterError(f"free: {key} is the input the folds are met along")
-    if len(set(free)) != len(free):
-        raise ParameterError(f"free: an input is named twice in {', '.join(free)}")
+        if key == OFFSET:
+            raise ParameterError(f"free: {OFFSET!r} is the data's offset (offset=True)")
+    keys = free + tuple(k for k in hold if k not in free)
+    if len(set(keys)) != len(keys):
+        raise ParameterError(f"free: an input is named twice in {', '.join(keys)}")
     data = np.asarray(measured, float).reshape(-1)
+    if np.any(np.isinf(data)):
+        raise ParameterError(f"measured: must be finite (nan: not measured), got {data}")
     mask = ~np.isnan(data)
     if not mask.any():
-        raise ParameterError("measured: at least one fold value is needed")
+        raise ParameterError("measured: at least one value is needed")
+    readout = np.asarray(readout if readout is not None else
+                         [(i, 1) for i in range(data.size)], float).reshape(-1, 2)
+    if readout.shape[0] != data.size or np.any(np.abs(readout[:, 1]) != 1) \
+            or np.any(readout[:, 0] < 0) or np.any(readout[:, 0] % 1):
+        raise ParameterError("readout: one (fold index, sign +-1) per datum")
     if not (math.isfinite(sigma) and sigma > 0):
         raise ParameterError(f"sigma must be a finite number > 0, got {sigma!r}")
+    here = _identity(scene)
+    path = _remembered(("path", here, vary, keys), lambda: along(scene, (vary, *keys)))
+    names = keys + (OFFSET,)
     bounds = dict(bounds or {})
-    for key in bounds:
-        if key not in free:
-            raise ParameterError(f"bounds: {key!r} is not a free input ({', '.join(free)})")
-    lower = np.array([bounds.get(k, (-np.inf, np.inf))[0] for k in free], float)
-    upper = np.array([bounds.get(k, (-np.inf, np.inf))[1] for k in free], float)
-    path = along(scene, (vary, *free))
-    p0 = np.array(path.start[1:])
-    if np.any((p0 < lower) | (p0 > upper)):
+    for key, pair in bounds.items():
+        if key not in names:
+            raise ParameterError(f"bounds: {key!r} is not a free input ({', '.join(names)})")
+        lo = check_value(f"bounds {key} (lower)", pair[0], lambda x: True, "a finite number")
+        check_value(f"bounds {key} (upper)", pair[1], lambda x: x > lo,
+                    f"a finite number above the lower bound {lo:g}")
+    lower = np.array([bounds.get(k, (-np.inf, np.inf))[0] for k in names], float)
+    upper = np.array([bounds.get(k, (-np.inf, np.inf))[1] for k in names], float)
+    priors = dict(priors or {})
+    for key, prior in priors.items():
+        if not isinstance(prior, Prior):
+            raise ParameterError(f"prior {key}: must be a Prior(mean, sd), got {prior!r:.60}")
+        if key not in free and not (key == OFFSET and offset):
+            raise ParameterError(f"prior {key}: {key} is not free (free: "
+                                 f"{', '.join(free + ((OFFSET,) if offset else ()))}); a "
+                                 "prior acts on a fitted input only")
+    mean = np.array([priors[k].mean if k in priors else 0.0 for k in names])
+    scale = np.array([1.0 / priors[k].sd if k in priors else 0.0 for k in names])
+    p0 = np.array([*path.start[1:], 0.0])
+    free_mask = np.array([k in free for k in keys] + [bool(offset)])
+    if np.any(free_mask & ((p0 < lower) | (p0 > upper))):
         raise ParameterError("bounds: the scene's values of the free inputs (the start) lie "
                              "outside the bounds")
-    found = scene_folds(scene, vary, start, stop, n, throw=False)
-    if len(found) < data.size or not all(f.converged for f in found[:data.size]):
-        raise ParameterError(f"the start has {len(found)} fold(s) along {vary} from "
-                             f"{start:g} to {stop:g}; {data.size} value(s) were given: start "
-                             "nearer the answer, or widen the range")
-    span = stop - start
-    z0 = np.stack([np.concatenate([f.state, f.null_vector, [(f.value - start) / span]])
-                   for f in found[:data.size]])
-    disc = discretise(path.template, n)
-    res, values, cov = jax.device_get(_fit_program(
-        path, disc, start, span, jnp.asarray(z0), jnp.asarray(p0),
-        jnp.asarray(np.nan_to_num(data)), jnp.asarray(mask), float(sigma),
-        jnp.asarray(lower), jnp.asarray(upper), max_iter))
-    ok, settled = bool(res.ok), bool(res.converged)
-    reasons = []
-    if not ok:
-        reasons.append("the fold model failed at the last point (a solve did not converge, "
-                       "or a fold left the range)")
-    if not settled:
-        reasons.append(f"the gradient did not vanish (|grad| = {float(res.grad_norm):.2e}) "
-                       f"within {int(res.iterations)} iterations")
-    std = None if design else {k: float(math.sqrt(max(cov[j, j], 0.0)))
-                               for j, k in enumerate(free)}
-    values = [float(v) for v in values]
-    residuals = [float(v - d) if mk else None for v, d, mk in zip(values, data, mask)]
-    return SceneFit(free=free, estimates={k: float(v) for k, v in zip(free, res.p)}, std=std,
-                    folds=values, residuals=residuals,
-                    chi2=float(np.dot(res.r, res.r)), converged=not reasons,
-                    iterations=int(res.iterations),
-                    status=Status.of(not reasons),
-                    reason="; ".join(reasons) or None)
+    n_folds = int(readout[:, 0].max()) + 1
+    if z0 is None:
+        found = _remembered(("folds", here, vary, start, stop, n),
+                            lambda: scene_folds(scene, vary, start, stop, n, throw=False))
+        if len(found) < n_folds or not all(f.converged for f in found[:n_folds]):
+            raise ParameterError(f"the start has {len(found)} fold(s) along {vary} from "
+                                 f"{start:g} to {stop:g}; the data need {n_folds}: start "
+                                 "nearer the answer, or widen the range")
+        z0 = np.stack([np.concatenate([f.state, f.null_vector, [(f.value - start) /
+                                                                (stop - start)]])
+                       for f in found[:n_folds]])
+    arrays = dict(path=path, disc=discretise(path.template, n), origin=start,
+                  span=stop - start, z0=jnp.asarray(z0), p0=jnp.asarray(p0),
+                  free=jnp.asarray(free_mask), sigma=float(sigma),
+                  which=jnp.asarray(readout[:, 0].astype(np.int32)),
+                  sign=jnp.asarray(readout[:, 1]), prior_mean=jnp.asarray(mean),
+                  prior_scale=jnp.asarray(scale * free_mask), lower=jnp.asarray(lower),
+                  upper=jnp.asarray(upper), magnets=_remembered(
+                      ("magnets", here, keys), lambda: _magnets(scene, keys, p0)))
+    names_free = free + ((OFFSET,) if offset else ())
+    return _Problem(keys, names_free, arrays, data, mask, int(mask.sum()),
+                    sum(1 for k in priors if k in names_free), priors,
+                    abs(stop - start)), path
+
+
+def _solve(problem: _Problem, max_iter: int, design: bool = False):
+    """(the record, the fold states at the answer)."""
+    a = problem.arrays
+    res, folds = _fit_program(a["path"], a["disc"], a["origin"], a["span"], a["z0"],
+                                 a["p0"], a["free"], jnp.asarray(np.nan_to_num(problem.data)),
+                                 jnp.asarray(problem.mask), a["sigma"], a["which"], a["sign"],
+                                 a["prior_mean"], a["prior_scale"], a["lower"], a["upper"],
+                                 a["magnets"], max_iter)
+    return record(problem, res, folds, design), res.aux
+
+
+# --- the public analyses -------------------------------------------------------------------
+
+def fit_folds(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float], measured,
+              free, sigma: float = 1.0, bounds: dict | None = None, n: int = DEFAULT_N,
+              max_iter: int = 60, design: bool = False, *, readout=None,
+              offset: bool = False, priors: dict | None = None, hold=()) -> SceneFit:
+    """Fit the inputs ``free`` (keys) so that the folds met along ``vary`` over
+    ``vary_range`` sit at ``measured`` (module docstring: NaN where not measured; datum i
+    reads fold ``readout[i][0]`` with sign ``readout[i][1]``, by default the folds in the
+    order met), each with standard deviation ``sigma`` (``vary``'s units). ``offset``: fit
+    a shared offset of the data too (``OFFSET``); ``priors``: key -> ``Prior``;
+    ``bounds``: key -> (lo, hi) (default unbounded); ``hold``: inputs carried but held (one
+    compiled program then serves every subset of ``free + hold``). The scene's values are
+    the start.
+    """
+    problem, _ = _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n,
+                          readout, offset, priors, hold)
+    return _solve(problem, max_iter, design)[0]
+
+
+def fit_batch(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float], measured,
+              free, sigma: float = 1.0, bounds: dict | None = None, n: int = DEFAULT_N,
+              max_iter: int = 60, *, readout=None, offset: bool = False,
+              priors: dict | None = None, hold=(), method: str = "auto",
+              progress: bool = False) -> list[SceneFit]:
+    """``fit_folds`` of each row of ``measured`` (K, data), the rest shared (one start).
+
+    ``method="vmap"`` runs them in one vmapped, compiled call (the form that scales on a
+    GPU); ``"loop"`` runs the compiled single fit row by row, faster on a CPU, where every
+    nested while loop of a vmapped batch runs until its slowest element is done; ``"auto"``
+    picks vmap on a GPU. ``progress`` shows a progress bar (loop); Ctrl-C raises
+    ``jaxrod.progress.Interrupted`` with the fits done so far as ``partial``.
+    """
+    rows = np.atleast_2d(np.asarray(measured, float))
+    problem, _ = _prepare(scene, vary, vary_range, rows[0], free, sigma, bounds, n, readout,
+                          offset, priors, hold)
+    problems = []
+    for i, row in enumerate(rows):
+        mask = ~np.isnan(row)
+        if np.any(np.isinf(row)) or not mask.any() or row.size != problem.data.size:
+            raise ParameterError(f"measured row {i}: {problem.data.size} finite values "
+                                 "(nan: not measured), at least one")
+        problems.append(dataclasses.replace(problem, data=row, mask=mask,
+                                            n_data=int(mask.sum())))
+    if method == "auto":
+        method = "vmap" if jax.default_backend() == "gpu" else "loop"
+    if method not in ("vmap", "loop"):
+        raise ParameterError(f"method must be 'auto', 'vmap' or 'loop', got {method!r}")
+    if method == "vmap":
+        a = problem.arrays
+        res, folds = _batch_program(
+            a["path"], a["disc"], a["origin"], a["span"], a["z0"], a["p0"], a["free"],
+            jnp.asarray(np.nan_to_num(rows)), jnp.asarray(~np.isnan(rows)), a["sigma"],
+            a["which"], a["sign"], a["prior_mean"], a["prior_scale"], a["lower"], a["upper"],
+            a["magnets"], max_iter)
+        return [record(pr, jax.tree.map(lambda x, i=i: x[i], res), folds[i], False)
+                for i, pr in enumerate(problems)]
+    out = []
+    bar = progress_bar(len(problems), "fits", "fit", progress)
+    try:
+        for pr in problems:
+            out.append(_solve(pr, max_iter)[0])
+            bar.update(1)
+    except KeyboardInterrupt:
+        raise Interrupted(out, f"after {len(out)} of {len(problems)} fits") from None
+    finally:
+        bar.close()
+    return out
+
+
+def profile(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float], measured,
+            name: str, free, sigma: float = 1.0, values=None, count: int = 15,
+            span: float = 3.0, fitted: SceneFit | None = None, n: int = DEFAULT_N,
+            max_iter: int = 60, *, readout=None, offset: bool = False,
+            priors: dict | None = None, bounds: dict | None = None, hold=()) -> dict:
+    """The profile likelihood of the free input ``name`` (or ``OFFSET``): chi^2 minimised
+    over the other free inputs with ``name`` held at each of ``values`` (default ``count``
+    values within ``span`` standard deviations of the estimate), beside the Laplace
+    (quadratic) approximation chi2_min + ((v - estimate) / std)^2. The held input's prior
+    term counts at each value. One compiled program for every value (the held input is a
+    masked entry of the same fit), each warm-started from the last."""
+    kw = dict(readout=readout, offset=offset, priors=priors, hold=hold)
+    names = tuple(free) + ((OFFSET,) if offset else ())
+    if name not in names:
+        raise ParameterError(f"profile: {name!r} is not a free input ({', '.join(names)})")
+    best = fitted or fit_folds(scene, vary, vary_range, measured, free, sigma, bounds, n,
+                               max_iter, **kw)
+    centre, sd = best.estimates[name], best.std[name] if best.std else None
+    if values is None:
+        half = span * sd if sd is not None else 0.3 * abs(centre) + (5.0 if name == OFFSET
+                                                                     else 0.0)
+        values = np.linspace(centre - half, centre + half, count)
+    values = np.asarray(values, float)
+    others = tuple(k for k in free if k != name)
+    held = {k: v for k, v in (priors or {}).items() if k != name}
+    problem, _ = _prepare(with_values(scene, {k: best.estimates[k] for k in free}), vary,
+                          vary_range, measured, others, sigma,
+                          {k: b for k, b in (bounds or {}).items() if k != name}, n,
+                          readout, offset and name != OFFSET, held,
+                          hold=tuple(hold) + ((name,) if name != OFFSET else ()))
+    keys = problem.keys + (OFFSET,)
+    j = keys.index(name)
+    p0 = np.asarray(problem.arrays["p0"]).copy()
+    if offset and name != OFFSET:
+        p0[-1] = best.estimates[OFFSET]
+    prior = (priors or {}).get(name)
+    chi2, converged = [], []
+    # from the centre outwards on each side, each start the last answer's folds
+    order = np.argsort(np.abs(values - centre), kind="stable")
+    results = {}
+    for side in (values >= centre, values < centre):
+        z0 = problem.arrays["z0"]
+        for i in [i for i in order if side[i]]:
+            p = p0.copy()
+            p[j] = values[i]
+            arrays = problem.arrays | {"p0": jnp.asarray(p), "z0": z0}
+            fit, z = _solve(dataclasses.replace(problem, arrays=arrays), max_iter)
+            if fit.converged:
+                z0 = z
+            extra = ((values[i] - prior.mean) / prior.sd) ** 2 if prior is not None else 0.0
+            results[i] = (fit.chi2 + extra if fit.converged else math.nan, fit.converged)
+    chi2 = [results[i][0] for i in range(len(values))]
+    converged = [results[i][1] for i in range(len(values))]
+    laplace = None if sd is None else (best.chi2 + ((values - centre) / sd) ** 2).tolist()
+    return {"name": name, "values": [float(v) for v in values], "chi2": chi2,
+            "converged": converged, "laplace_chi2": laplace, "estimate": centre, "std": sd,
+            "chi2_min": best.chi2}
 
 
 def design_folds(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float],
-                 targets, free, bounds: dict | None = None, n: int = DEFAULT_N) -> SceneFit:
-    """The inputs ``free`` whose folds along ``vary`` sit at ``targets`` (in the order met):
-    ``fit_folds`` with the targets as data; converged means the targets are hit to 1e-9 of
-    the range."""
-    out = fit_folds(scene, vary, vary_range, targets, free, 1.0, bounds, n, design=True)
+                 targets, free, bounds: dict | None = None, n: int = DEFAULT_N, *,
+                 readout=None, starts: int = 0) -> SceneFit | list[SceneFit]:
+    """The inputs ``free`` whose folds along ``vary`` sit at ``targets`` (``readout`` as in
+    ``fit_folds``): the fit with the targets as data; converged means the targets are hit
+    to 1e-9 of the range. ``starts`` > 0: also from a grid of ``starts`` values per input
+    within the (finite) bounds (cell centres, in log for positive bounds; a start without
+    the folds is skipped), and the list of the distinct answers, those that hit the targets
+    first, then by their largest miss."""
     start, stop = check_range(scene, vary, *vary_range)
-    miss = max(abs(r) for r in out.residuals if r is not None)
-    if out.converged and miss > 1e-9 * abs(stop - start):
-        return dataclasses.replace(out, converged=False, status=Status.NOT_CONVERGED,
-                                   reason=f"the folds miss the targets by {miss:.3g}: no "
-                                   "design of these inputs hits them (within the bounds)")
-    return out
+    tol = 1e-9 * abs(stop - start)
+
+    def checked(out: SceneFit) -> SceneFit:
+        miss = max(abs(r) for r in out.residuals if r is not None)
+        if out.converged and miss > tol:
+            return dataclasses.replace(out, converged=False, status=Status.NOT_CONVERGED,
+                                       reason=f"the folds miss the targets by {miss:.3g}: "
+                                       "no design of these inputs hits them (within the "
+                                       "bounds)")
+        return out
+
+    if not starts:
+        return checked(fit_folds(scene, vary, vary_range, targets, free, 1.0, bounds, n,
+                                 design=True, readout=readout))
+    bounds = dict(bounds or {})
+    free = tuple(free)
+    missing = [k for k in free if not all(map(math.isfinite, bounds.get(k, (np.inf,) * 2)))]
+    if missing:
+        raise ParameterError(f"bounds: a grid of starts needs finite bounds of "
+                             f"{', '.join(missing)}")
+    cells = (np.arange(starts) + 0.5) / starts
+    axes = [lo * (hi / lo) ** cells if lo > 0 else lo + (hi - lo) * cells
+            for lo, hi in (bounds[k] for k in free)]
+    miss = lambda d: max(abs(r) for r in d.residuals if r is not None)
+    outcomes = []
+    for point in [None, *itertools.product(*axes)]:
+        try:  # a start in the rod's reach, or without the folds, is skipped
+            at = scene if point is None else with_values(scene, dict(zip(free, point)))
+            out = checked(fit_folds(at, vary, vary_range, targets, free, 1.0, bounds, n,
+                                    design=True, readout=readout))
+        except ParameterError:
+            continue
+        if not any(all(abs(out.estimates[k] - d.estimates[k]) <= 1e-6 * max(
+                abs(d.estimates[k]), 1e-12) for k in free) for d in outcomes):
+            outcomes.append(out)
+    return sorted(outcomes, key=lambda d: (not d.converged, miss(d)))

@@ -18,11 +18,11 @@ offset delta of the angular scale (a misaligned track):
 
 With E the only material unknown, G and M scale as 1/E (``gravity_group``,
 ``magnet_group``) and D does not depend on E. The fit minimises
-0.5 sum_i ((model_i - measured_i) / sigma)^2 over (log E, delta) with the calibration's one
-least-squares program (``jaxrod.inverse.calibration``: optax's L-BFGS direction, Armijo line
-search, Gauss-Newton scaling, the folds tracked by Moore-Spence and differentiated
-implicitly). A ``FitSetup`` (the groups at a reference modulus) becomes the physical design
-point with those groups (``point_of``). The standard deviation of E follows from the
+0.5 sum_i ((model_i - measured_i) / sigma)^2 over (E, delta) with the generic fit on the
+shipped rig (``jaxrod.inverse.scene_fit``: optax's L-BFGS direction, Armijo line search,
+Gauss-Newton scaling, the folds tracked by Moore-Spence and differentiated implicitly). A
+``FitSetup`` (the groups at a reference modulus) becomes the physical design point with
+those groups (``point_of``). The standard deviation of E follows from the
 Gauss-Newton covariance at the optimum. ``model_angles`` (a continuation from the straight
 rod per call) is the independent reference the tests build synthetic data with.
 """
@@ -37,14 +37,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.design_point import DesignPoint
-from jaxrod.inverse.calibration import (
+from jaxrod.inverse.fit import (
     ANGLE_NAMES,  # noqa: F401  (the angles' order)
     OFFSET,
-    angles_from_folds,
+    calibrate_rows,
+    fit,
     parse_angles,
 )
-from jaxrod.inverse.fit import Calibration, fit
-from jaxrod.inverse.fit import fit_batch as calibrate_rows
+from jaxrod.inverse.scene_fit import SceneFit
 from jaxrod.magnet.folds import fold_angles
 from jaxrod.params import NDFEB_MAGNET, ParameterError, check, check_track_clearance, preset
 from jaxrod.programs import jit
@@ -86,6 +86,12 @@ def model_angles(params, setup: FitSetup, n: int = 12):
     return angles_from_folds(alphas, params[1]), converged
 
 
+def angles_from_folds(alphas, offset):
+    """The four switching angles (degrees) from the folds (radians, lower first)."""
+    return jnp.array([-1.0, 1.0, 1.0, -1.0]) * jnp.degrees(alphas[jnp.array([0, 1, 0, 1])]) \
+        + offset
+
+
 class FitResult(dict):
     """E_Pa, E_std_Pa, offset_deg, offset_std_deg, residuals_deg (None where not measured),
     converged, iterations, reduced_chi2, reason (why not converged), warning (poor fit)."""
@@ -120,17 +126,17 @@ def point_of(setup: FitSetup) -> DesignPoint:
     return point
 
 
-def fit_result(cal: Calibration, fit_offset: bool) -> FitResult:
+def fit_result(cal: SceneFit, fit_offset: bool) -> FitResult:
     """A calibration as the flat ``FitResult`` of the E-only fit (E_Pa and E_std_Pa None
     when E was not fitted, or E_std_Pa when the angles do not fix it)."""
     est, std = cal.estimates, cal.std
-    used = [r for r in cal.residuals_deg if r is not None]
+    used = [r for r in cal.residuals if r is not None]
     dof = max(len(used) - (2 if fit_offset else 1), 1)
-    chi2 = float(np.sum(np.square(used))) / cal.sigma_deg**2
+    chi2 = float(np.sum(np.square(used))) / cal.sigma**2
     return FitResult(
         E_Pa=est.get("E"), E_std_Pa=std.get("E"), offset_deg=est.get(OFFSET, 0.0),
         offset_std_deg=std.get(OFFSET, 0.0) if fit_offset else 0.0,
-        residuals_deg=cal.residuals_deg, converged=cal.converged, iterations=cal.iterations,
+        residuals_deg=cal.residuals, converged=cal.converged, iterations=cal.iterations,
         reduced_chi2=chi2 / dof, reason=cal.reason, warning="; ".join(cal.warnings) or None)
 
 
