@@ -164,7 +164,7 @@ def cmd_sweep(args) -> int:
     from jaxrod.magnet.folds import locate_folds
     from jaxrod.magnet.sweep import hysteresis_sweep
     from jaxrod.plotting import hysteresis_figure
-    from jaxrod.progress import Interrupted, progress_bar
+    from jaxrod.progress import Interrupted
 
     if args.rig is not None or args.rate is not None:
         from jaxrod.cli.rate_sweep import rate_sweep_command, sweep_on_file
@@ -181,22 +181,10 @@ def cmd_sweep(args) -> int:
             _source(args, name, "default"))
         if getattr(args, name) is None:
             setattr(args, name, default)
-    total = None
-    bar = None
-
-    def progress(done, of):
-        nonlocal bar, total
-        if bar is None:
-            bar, total = progress_bar(of, "sweep", "position", not args.quiet), 0
-        bar.update(done - total)
-        total = done
-
     try:
         sweep = hysteresis_sweep(scene, n=args.n, alpha_max_deg=args.alpha_max,
-                                 step_deg=args.step, progress=progress)
+                                 step_deg=args.step, progress=not args.quiet)
     except Interrupted as stop:
-        if bar is not None:
-            bar.close()
         sweep = stop.partial
         summary = info | {"snaps": sweep["snaps"], "converged": sweep["converged"],
                           "complete": False, "reason": sweep["reason"],
@@ -205,8 +193,6 @@ def cmd_sweep(args) -> int:
         print(f"jaxrod sweep: {sweep['reason']}; wrote what was computed to "
               f"{out_dir / 'sweep.csv'} and sweep.json (marked incomplete)", file=sys.stderr)
         return 130
-    if bar is not None:
-        bar.close()
     report = locate_folds(scene, n=args.n)
     summary = info | {"snaps": sweep["snaps"], "converged": sweep["converged"],
                       "complete": True, "positions": int(sweep["alpha_deg"].size),

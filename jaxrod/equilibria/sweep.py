@@ -124,19 +124,24 @@ def sweep(scene: Scene | FileScene, vary: str, values, n: int = DEFAULT_N, state
         return Sweep(vary, values[:done], cols[0], np.degrees(cols[3]), cols[4],
                      cols[1].astype(bool), cols[2].astype(bool), reason is None, reason)
 
-    for lo in range(0, values.size, CHUNK):
-        chunk = values[lo:lo + CHUNK]
-        padded = np.pad(chunk, (0, CHUNK - chunk.size), mode="edge")
-        _, xs, snapped, ok, (angle, X) = jax.device_get(
-            _chunk(x, jnp.asarray(padded), path, disc))
-        k = chunk.size
-        # the state after the last real value (padding repeats it: the same state)
-        x = jnp.asarray(xs[k - 1])
-        parts.append((xs[:k], snapped[:k], ok[:k] & start.converged, angle[:k], X[:k]))
-        bar.update(k)
-        if interrupt_requested() and lo + CHUNK < values.size:
-            bar.close()
-            raise Interrupted(result(f"interrupted after {lo + k} of {values.size} values"),
-                              "sweep")
-    bar.close()
+    done = 0
+    try:
+        for lo in range(0, values.size, CHUNK):
+            chunk = values[lo:lo + CHUNK]
+            padded = np.pad(chunk, (0, CHUNK - chunk.size), mode="edge")
+            _, xs, snapped, ok, (angle, X) = jax.device_get(
+                _chunk(x, jnp.asarray(padded), path, disc))
+            k = chunk.size
+            # the state after the last real value (padding repeats it: the same state)
+            x = jnp.asarray(xs[k - 1])
+            parts.append((xs[:k], snapped[:k], ok[:k] & start.converged, angle[:k], X[:k]))
+            done += k
+            bar.update(k)
+            if interrupt_requested() and done < values.size:
+                raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        raise Interrupted(result(f"interrupted (Ctrl-C) after {done} of {values.size} "
+                                 "values"), "sweep") from None
+    finally:
+        bar.close()
     return result(None)

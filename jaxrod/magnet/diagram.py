@@ -27,7 +27,6 @@ from jaxrod.params import check, check_degree, check_track_clearance
 from jaxrod.programs import jit
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
 from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
-from jaxrod.solvers.descent import descend
 from jaxrod.solvers.newton import newton
 from jaxrod.stored import StoredProgram
 
@@ -60,9 +59,6 @@ def _observables_of(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisatio
     one = lambda th, a: (disc.mean(th), tip_angle(th, disc),
                          ALPHA_MODEL.energy(th, a, (scene, disc)))
     return jax.vmap(one)(theta, alpha)
-
-
-_observables = jit(_observables_of)
 
 
 def default_options(max_points: int = 400) -> ContinuationOptions:
@@ -110,12 +106,6 @@ def _equilibrium(theta0, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation)
     """Newton for the equilibrium at magnet angle alpha from theta0 (compiled once)."""
     return newton(_alpha_residual, theta0, (alpha, scene, disc), tol=1e-13,
                   jacobian=_alpha_jacobian)
-
-
-@jit
-def _relax(theta0, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
-    """Energy descent to a local minimum at magnet angle alpha (compiled once)."""
-    return descend(ALPHA_MODEL, theta0, (scene, disc), lam=alpha)
 
 
 def trace_diagram(scene: DipoleMagnet, n: int = DEFAULT_N,

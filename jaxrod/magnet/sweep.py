@@ -6,98 +6,69 @@ from __future__ import annotations
 
 import math
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.planar import planar_discretisation
-from jaxrod.equilibria.sweep import follow_path
+from jaxrod.equilibria.equilibrium import mean_functional
+from jaxrod.equilibria.sweep import Sweep
 from jaxrod.equilibria.sweep import sweep as scene_sweep
-from jaxrod.magnet.diagram import (
-    DEFAULT_N,
-    _equilibrium,
-    _observables,
-    _relax,
-)
+from jaxrod.magnet.diagram import DEFAULT_N, _equilibrium
 from jaxrod.magnet.folds import Fold
 from jaxrod.params import check, check_degree
-from jaxrod.programs import jit
 from jaxrod.progress import Interrupted
 from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, preset_or_scene, tip_angle
 from jaxrod.status import SolverError, Status
 
 
-@jit
-def _sweep(theta0, alphas, scene, disc):
-    """The generic quasi-static path (``jaxrod.equilibria.sweep``) in the magnet angle."""
-    return follow_path(ALPHA_MODEL, theta0, alphas, (scene, disc))
-
-
-#: Magnet positions per compiled chunk of a sweep (progress and Ctrl-C act between chunks).
-SWEEP_CHUNK = 256
-
-
 def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: float = 50.0,
-                     step_deg: float = 0.25, progress=None, throw: bool = False) -> dict:
-    """The experiment's protocol: alpha from -alpha_max to +alpha_max (clockwise), then back.
+                     step_deg: float = 0.25, progress: bool = False,
+                     throw: bool = False) -> dict:
+    """The experiment's protocol: alpha from -alpha_max to +alpha_max (clockwise), then back,
+    as the generic quasi-static sweep (``jaxrod.equilibria.sweep``) of the paper's scene in
+    the magnet's angle: at each position the previous state is continued by Newton; where it
+    no longer exists as a nearby stable equilibrium (a fold was passed) the rod snaps,
+    descending the energy to the other stable branch. Returns both sweeps with the tip
+    angle and q at each position, the snaps on the grid (the first grid angle past a fold)
+    and whether every step converged.
 
-    At each magnet position the previous state is continued by Newton; when it no longer
-    exists as a nearby stable equilibrium (a fold was passed) the rod snaps: the energy is
-    descended from the last state to the other stable branch (the steps of
-    ``jaxrod.equilibria.sweep``, for any scene). Returns both sweeps, the snap
-    angles on the grid (the first grid angle past a fold) and whether every step converged.
-
-    The positions run in compiled chunks of ``SWEEP_CHUNK`` (one program for every chunk);
-    ``progress(done, total)`` is called after each. Ctrl-C raises
-    ``jaxrod.progress.Interrupted`` whose ``partial`` is this dict for the positions done
-    (``complete`` False, ``reason`` saying where). ``throw``: raise ``SolverError``
-    (NOT_CONVERGED) if a step did not converge (default: ``converged`` False in the dict).
+    ``progress``: a progress bar. Ctrl-C raises ``jaxrod.progress.Interrupted`` whose
+    ``partial`` is this dict for the positions done (``complete`` False, ``reason`` saying
+    where). ``throw``: raise ``SolverError`` (NOT_CONVERGED) if a step did not converge
+    (default: ``converged`` False in the dict).
 
     Paper: the loop of eq. ``intro-hysteresis`` and Theorem ``thm:permanent_physical``
     (capture at the lower fold, release at the upper).
     """
     alpha_max_deg = check("alpha-max", alpha_max_deg)
     step_deg = check("step", step_deg)
-    disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
+    n = check_degree(n, "N-magnet")
     up = np.arange(-alpha_max_deg, alpha_max_deg + 0.5 * step_deg, step_deg)
     alphas = np.radians(np.concatenate([up, up[::-1][1:]]))
-    start = _relax(jnp.zeros(disc.size), alphas[0], scene, disc)
-    theta, parts = start.x, []
     try:
-        for i in range(0, alphas.size, SWEEP_CHUNK):
-            chunk = alphas[i:i + SWEEP_CHUNK]
-            padded = np.pad(chunk, (0, SWEEP_CHUNK - chunk.size), mode="edge")
-            theta_end, (thetas, snapped, ok) = _sweep(theta, jnp.asarray(padded), scene, disc)
-            thetas, snapped, ok = (np.asarray(v)[:chunk.size] for v in (thetas, snapped, ok))
-            theta = theta_end
-            parts.append((thetas, snapped, ok))
-            if progress is not None:
-                progress(min(i + SWEEP_CHUNK, alphas.size), alphas.size)
-    except KeyboardInterrupt:
-        done = sum(p[0].shape[0] for p in parts)
-        raise Interrupted(_sweep_result(alphas[:done], up.size, parts, start, scene, disc,
-                                        f"interrupted (Ctrl-C) after {done} of {alphas.size} "
-                                        "magnet positions"), "sweep") from None
-    result = _sweep_result(alphas, up.size, parts, start, scene, disc, None)
+        done = scene_sweep(scene.scene, "magnet.alpha", alphas, n, progress=bool(progress))
+    except Interrupted as stop:
+        raise Interrupted(_as_dict(stop.partial, up.size, n), "sweep") from None
+    result = _as_dict(done, up.size, n)
     if throw and not result["converged"]:
         raise SolverError(Status.NOT_CONVERGED, "hysteresis_sweep: a step did not converge")
     return result
 
 
-def _sweep_result(alphas, n_up, parts, start, scene, disc, reason) -> dict:
-    if parts:
-        thetas, snapped, ok = (np.concatenate(v) for v in zip(*parts))
-        q, tip, _ = _observables(jnp.asarray(thetas), jnp.asarray(alphas), scene, disc)
-    else:
-        snapped, ok, q, tip = (np.zeros(0, bool), np.zeros(0, bool), np.zeros(0), np.zeros(0))
-    direction = np.where(np.arange(alphas.size) < n_up, "cw", "ccw")
-    snaps = [{"direction": str(direction[i]), "alpha_deg": float(np.degrees(alphas[i])),
-              "tip_before_deg": float(np.degrees(tip[i - 1])),
-              "tip_after_deg": float(np.degrees(tip[i]))}
-             for i in np.nonzero(snapped)[0]]
-    return {"alpha_deg": np.degrees(alphas), "tip_deg": np.degrees(np.asarray(tip)),
-            "q": np.asarray(q), "snapped": snapped, "direction": direction, "snaps": snaps,
-            "converged": bool(np.all(ok) and bool(start.converged)),
-            "complete": reason is None, "reason": reason}
+def _as_dict(s: Sweep, n_up: int, n: int) -> dict:
+    """The generic sweep in the experiment's words: the magnet angle, the direction."""
+    alpha_deg = np.degrees(s.values)
+    q = np.asarray(jax.vmap(mean_functional(planar_discretisation(n, "clamped")))(s.states)) \
+        if len(s.values) else np.zeros(0)
+    direction = np.where(np.arange(alpha_deg.size) < n_up, "cw", "ccw")
+    snaps = [{"direction": str(direction[i]), "alpha_deg": float(alpha_deg[i]),
+              "tip_before_deg": float(s.tip_angle_deg[i - 1]),
+              "tip_after_deg": float(s.tip_angle_deg[i])}
+             for i in np.nonzero(s.snapped)[0]]
+    return {"alpha_deg": alpha_deg, "tip_deg": np.asarray(s.tip_angle_deg), "q": q,
+            "snapped": np.asarray(s.snapped), "direction": direction, "snaps": snaps,
+            "converged": s.converged, "complete": s.complete, "reason": s.reason}
 
 
 def square_root_law(scene: DipoleMagnet, fold: Fold, n: int = DEFAULT_N,
