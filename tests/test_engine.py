@@ -210,6 +210,26 @@ def test_the_generic_folds_of_the_papers_scene_agree_with_its_diagram_and_fast_p
                        rtol=0, atol=1e-9)
 
 
+@pytest.mark.parametrize("inside, n", [(5e-4, 12), (1e-4, 16)])
+def test_two_folds_within_one_step_near_the_cusp_are_found(inside, n):
+    """Within 0.05% of the cusp in the track radius the two folds lie under 0.01 degrees
+    apart, inside one continuation step: the branch traced at the default step mostly
+    detects none (in both cases when written). ``folds`` sees the branch
+    come near singular, traces it again with finer steps and finds both, agreeing with the
+    fast path (one-mode brackets, then Moore-Spence on the paper's own energy) to 1e-9
+    degrees."""
+    # the paper's rig with its track radius inside the cusp's (0.1201910 m)
+    G_c, M_c, D_c = jr.default_point().replace(
+        "track-radius", 0.12019102566157 * (1.0 - inside)).groups()
+    found = jr.folds(DipoleMagnet(G_c, M_c, D_c, 0.0).scene, "magnet.alpha", 0.0,
+                     math.pi / 2, n=n)
+    fast = jr.fold_pairs(np.array([G_c]), np.array([M_c]), np.array([D_c]), n=n)
+    assert len(found) == 2 and bool(fast.bistable[0])
+    assert fast.alpha_deg[0, 1] - fast.alpha_deg[0, 0] < 0.01
+    assert np.allclose(sorted(math.degrees(f.value) for f in found), fast.alpha_deg[0],
+                       rtol=0, atol=1e-9)
+
+
 def test_a_new_term_runs_through_branch_folds_fold_curve_and_map():
     scene = spring_scene(0.05)
     b = jr.branch(scene, "magnet.alpha", 0.0, math.pi / 2, n=N)

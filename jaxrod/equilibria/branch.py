@@ -16,18 +16,25 @@ import numpy as np
 
 from jaxrod.equilibria.branch_points import refine_branch_points, stability_changes
 from jaxrod.equilibria.equilibrium import DEFAULT_N
-from jaxrod.equilibria.folds import refine
+from jaxrod.equilibria.folds import refine, traced_with_folds
 from jaxrod.equilibria.record import Branch, checked
-from jaxrod.equilibria.trace import trace
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.continuation import ContinuationOptions
 
 
-def with_special_points(scene: Scene | FileScene, b: Branch, n: int = DEFAULT_N) -> Branch:
-    """``b`` with its folds and branch points refined, in the order met along it."""
-    points = refine(scene, b, n) + refine_branch_points(scene, b, n)
-    met = np.concatenate([b.fold_indices, stability_changes(b)])  # where each was detected
+def with_special_points(scene: Scene | FileScene, b: Branch, n: int = DEFAULT_N,
+                        folds: list | None = None) -> Branch:
+    """``b`` with its folds (``folds``, or refined here) and branch points refined, in the
+    order met along it."""
+    folds = refine(scene, b, n) if folds is None else folds
+    points = folds + refine_branch_points(scene, b, n)
+    # where each was met: a fold at the branch's point nearest it (state and value)
+    theta, value = np.asarray(b.theta), np.asarray(b.value)
+    span = max(float(np.nanmax(value) - np.nanmin(value)), 1e-300)
+    at = [int(np.nanargmin(np.sqrt(np.mean((theta - f.state) ** 2, axis=1))
+                           + np.abs(value - f.value) / span)) for f in folds]
+    met = np.concatenate([np.asarray(at, float), stability_changes(b)])
     return dataclasses.replace(b, special_points=tuple(
         points[i] for i in np.argsort(met, kind="stable")))
 
@@ -47,7 +54,7 @@ def branch(scene: Scene | FileScene, vary: str, start: float, stop: float,
     before kept). ``throw``: raise ``SolverError`` for a special point whose refinement did
     not converge (else its ``converged`` and ``status`` say so).
     """
-    b = with_special_points(scene, trace(scene, vary, start, stop, n, state, options,
-                                         margins), n)
+    b, found = traced_with_folds(scene, vary, start, stop, n, state, options, margins)
+    b = with_special_points(scene, b, n, found)
     checked(list(b.special_points), "special point", throw)
     return b

@@ -24,7 +24,7 @@ import numpy as np
 from jaxrod.discretise.tail import tail_estimate
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
 from jaxrod.equilibria.record import Branch, SpecialPoint, checked
-from jaxrod.equilibria.trace import MODEL, NO_REST, check_range, trace
+from jaxrod.equilibria.trace import MODEL, NO_REST, branch_options, check_range, trace
 from jaxrod.programs import jit, padded
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, along
@@ -104,10 +104,62 @@ def _span(b: Branch) -> float:
     return span if span > 0 else 1.0
 
 
+#: With no fold found, a point of the branch whose smallest Hessian eigenvalue comes within
+#: this fraction of the branch's largest (away from a change of stability) may hide two
+#: folds within one step (near a cusp): the branch is traced again with finer steps.
+NEAR_SINGULAR = 1e-2
+#: Finer steps per re-trace, and how many re-traces at most.
+REFINE_STEP, RETRACES = 0.2, 2
+
+
+def _distinct(found: list[Fold], b: Branch) -> tuple[list[Fold], bool]:
+    """The folds with each listed once (two starts can converge to one fold when two folds
+    lie within one step), and whether any was repeated."""
+    span = _span(b)
+    out = []
+    for f in found:
+        if not any(abs(f.value - g.value) < 1e-7 * span and abs(f.q - g.q) < 1e-7
+                   for g in out):
+            out.append(f)
+    return out, len(out) < len(found)
+
+
+def _folds_may_hide(b: Branch, found: list[Fold]) -> bool:
+    """No fold found, but the branch comes near singular away from a change of stability
+    (``NEAR_SINGULAR``)."""
+    e = np.asarray(b.min_eig, float)
+    if found or e.size < 3 or not np.isfinite(e).any():
+        return False
+    near_change = np.zeros(e.size, bool)
+    flips = np.nonzero(np.sign(e[:-1]) * np.sign(e[1:]) <= 0)[0]
+    near_change[flips] = near_change[flips + 1] = True
+    small = np.abs(e) < NEAR_SINGULAR * np.nanmax(np.abs(e))
+    return bool(np.any(small & ~near_change & np.isfinite(e)))
+
+
+def traced_with_folds(scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
+                      state=None, options=None, margins: dict | None = None):
+    """(the branch, its folds refined and listed once), traced again with finer steps where
+    folds may hide within a step (``folds``)."""
+    options = options or branch_options()
+    for _ in range(RETRACES + 1):
+        b = trace(scene, vary, start, stop, n, state, options, margins=margins)
+        found, repeated = _distinct(refine(scene, b, n), b)
+        if not (repeated or _folds_may_hide(b, found)):
+            break
+        options = options._replace(ds_max=REFINE_STEP * options.ds_max,
+                                   max_points=2 * options.max_points)
+    return b, found
+
+
 def folds(scene: Scene | FileScene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
           state=None, throw: bool = True, margins: dict | None = None) -> list[Fold]:
     """The folds met along the branch of ``scene`` as ``vary`` goes from ``start`` to
-    ``stop`` (in the order met), each refined by Moore-Spence with its normal form.
+    ``stop`` (in the order met), each refined by Moore-Spence with its normal form. Near a
+    cusp two folds can lie within one continuation step (the branch's S too small to be
+    seen): where two refinements reach one fold, or none is found but the branch comes near
+    singular (``NEAR_SINGULAR``), the branch is traced again with steps ``REFINE_STEP``
+    times finer (up to ``RETRACES`` times).
 
     ``throw``: raise ``SolverError`` if a fold's refinement does not converge, or if the
     branch ended before ``stop`` (folds beyond would be missing: ``Branch.status`` says
@@ -115,8 +167,8 @@ def folds(scene: Scene | FileScene, vary: str, start: float, stop: float, n: int
     ``margins``: the magnets' radii by term name (``jaxrod.equilibria.trace.reach_along``).
     """
     start, stop = check_range(scene, vary, start, stop)
-    b = trace(scene, vary, start, stop, n, state, margins=margins)
+    b, found = traced_with_folds(scene, vary, start, stop, n, state, margins=margins)
     if throw and not b.complete:
         raise SolverError(next((s for s in b.status if not s.ok), Status.NOT_CONVERGED),
                           f"the branch along {vary} ended at {b.value[-1]:.6g}")
-    return checked(refine(scene, b, n), "fold", throw)
+    return checked(found, "fold", throw)
