@@ -224,3 +224,25 @@ def padded(arrays, size: int | None = None, multiple: int = 1):
     if size == k:
         return list(arrays)
     return [np.concatenate([a, np.repeat(a[:1], size - k, axis=0)]) for a in arrays]
+
+
+def steps_loop(step: Callable, carry, steps, budget: int | None = None):
+    """``lax.scan(step, carry, arange(steps))``'s (carry, outputs) with a static step
+    ``budget`` and ``steps`` traced (the shape of diffrax's ``max_steps``): the loop runs
+    ``steps`` times (a ``fori_loop``) into outputs of ``budget`` rows, the rows past
+    ``steps`` left zero; one program serves every count up to the budget (``bucket``).
+    ``budget`` None: ``steps`` is static and the loop a scan (reverse-mode
+    differentiable)."""
+    import jax.numpy as jnp
+
+    if budget is None:
+        return jax.lax.scan(step, carry, jnp.arange(steps))
+    shapes = jax.eval_shape(lambda c: step(c, jnp.asarray(0))[1], carry)
+    rows = jax.tree_util.tree_map(lambda s: jnp.zeros((budget, *s.shape), s.dtype), shapes)
+
+    def body(k, state):
+        c, out = state
+        c, o = step(c, k)
+        return c, jax.tree_util.tree_map(lambda r, v: r.at[k].set(v), out, o)
+
+    return jax.lax.fori_loop(0, steps, body, (carry, rows))

@@ -123,3 +123,22 @@ def test_a_second_key_of_the_same_scene_compiles_nothing():
         none = folds(scene, "gravity.G", 2.2, 2.0, n=12)
     assert none == [] and len(other) != 2
     assert c[0] == 0
+
+
+def test_a_new_duration_or_step_of_a_motion_compiles_nothing():
+    """The integrators take the step size traced and the step count within a static budget
+    (``jaxrod.programs.steps_loop``): after a motion of 40 steps, one of 37 steps of another
+    size and another end compile nothing, and give the first's states where they coincide
+    (the same steps: the first 20 of each)."""
+    from jaxrod.dynamics.integrate import simulate
+    from jaxrod.scenes.dipole import DipoleMagnet
+
+    scene = DipoleMagnet(2.2, 0.0236, 1.2228, 0.1).scene
+    for scheme in ("midpoint", "bdf2", "discrete-gradient"):
+        first = simulate(scene, np.zeros(8), 0.4, 0.01, n=8, scheme=scheme)
+        with compilations() as c:
+            other = simulate(scene, np.zeros(8), 0.37, 0.01, n=8, scheme=scheme)
+            simulate(scene, np.zeros(8), 0.5, 0.0125, n=8, scheme=scheme)
+        assert c[0] == 0, scheme
+        assert first.states.shape[0] == 40 and other.states.shape[0] == 37
+        np.testing.assert_allclose(other.states[:20], first.states[:20], rtol=0, atol=1e-13)

@@ -192,8 +192,8 @@ def test_throw_turns_a_failure_into_a_solver_error(reports, monkeypatch):
     assert not magnet_folds.fold_pair(no_folds)[1]
     with pytest.raises(SolverError, match="fold_pair"):
         magnet_folds.fold_pair(no_folds, throw=True)
-    real = magnet_sweep._sweep_result
-    monkeypatch.setattr(magnet_sweep, "_sweep_result",
+    real = magnet_sweep._as_dict
+    monkeypatch.setattr(magnet_sweep, "_as_dict",
                         lambda *a: real(*a) | {"converged": False})
     assert not magnet_sweep.hysteresis_sweep(scene, alpha_max_deg=5.0)["converged"]
     with pytest.raises(SolverError, match="hysteresis_sweep"):

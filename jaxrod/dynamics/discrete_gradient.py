@@ -38,7 +38,7 @@ import jax.numpy as jnp
 from jaxrod.dynamics.lagrangian import curvature_rate_form, kinetic, scene_at
 from jaxrod.dynamics.modes import mass_matrix
 from jaxrod.equilibria.equilibrium import FIXED, tip, tip_tangent
-from jaxrod.programs import jit
+from jaxrod.programs import jit, steps_loop
 from jaxrod.solvers.newton import newton
 
 TINY = 1e-24
@@ -113,7 +113,7 @@ def discrete_gradient_step(scene_mid, disc, q, p, h, c, guess):
                         lambda: newton(_residual, guess, args, tol=1e-12))
 
 
-def _run(path, disc, q0, p0, h, steps, c, start, rate):
+def _run(path, disc, q0, p0, h, steps, c, start, rate, budget=None):
     m = q0.shape[0]
 
     def step(carry, k):
@@ -132,8 +132,8 @@ def _run(path, disc, q0, p0, h, steps, c, start, rate):
         return (res.x, x), out
 
     x0 = jnp.concatenate([q0, p0])
-    _, out = jax.lax.scan(step, (x0, x0), jnp.arange(steps))
+    _, out = steps_loop(step, (x0, x0), steps, budget)
     return out
 
 
-run_discrete_gradient = jit(_run, static_argnames=("steps",))
+run_discrete_gradient = jit(_run, static_argnames=("budget",))

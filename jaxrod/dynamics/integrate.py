@@ -37,7 +37,7 @@ from jaxrod.dynamics.lagrangian import curvature_rate_form, kinetic, scene_at
 from jaxrod.dynamics.modes import positions
 from jaxrod.equilibria.equilibrium import DEFAULT_N, FIXED, discretise, tip, tip_tangent
 from jaxrod.params import ParameterError
-from jaxrod.programs import jit
+from jaxrod.programs import bucket, jit, steps_loop
 from jaxrod.scenes.path import scene_path, still_path
 from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.newton import newton
@@ -80,7 +80,7 @@ def _momentum(q0, q1, h, c, scene_mid, disc):
         + _drag(q0, q1, c, scene_mid, disc)
 
 
-def _run(path, disc, q0, p0, h, steps, c, start, rate):
+def _run(path, disc, q0, p0, h, steps, c, start, rate, budget=None):
     W = disc.quad_weights[:, None]
 
     def step(carry, k):
@@ -100,7 +100,7 @@ def _run(path, disc, q0, p0, h, steps, c, start, rate):
                res.residual_norm)
         return (q1, q, p1), out
 
-    _, out = jax.lax.scan(step, (q0, q0, p0), jnp.arange(steps))
+    _, out = steps_loop(step, (q0, q0, p0), steps, budget)
     return out
 
 
@@ -145,7 +145,7 @@ def observe(scene1, disc, q1, v1):
             tip_tangent(scene1, q1, disc), X)
 
 
-def _run_bdf(path, disc, q0, p0, h, steps, c, start, rate):
+def _run_bdf(path, disc, q0, p0, h, steps, c, start, rate, budget=None):
     def step(carry, k):
         q, qm, p, pm = carry
         at = scene_at(path, start, rate, (k + 1.0) * h)
@@ -156,12 +156,14 @@ def _run_bdf(path, disc, q0, p0, h, steps, c, start, rate):
         out = (res.x, *observe(at, disc, res.x, v1), res.converged, res.residual_norm)
         return (res.x, q, p1, p), out
 
-    _, out = jax.lax.scan(step, (q0, q0, p0, p0), jnp.arange(steps))
+    _, out = steps_loop(step, (q0, q0, p0, p0), steps, budget)
     return out
 
 
-_program = jit(_run, static_argnames=("steps",))
-_program_bdf = jit(_run_bdf, static_argnames=("steps",))
+#: The fixed-step programs: ``steps`` traced within a static budget (``bucket(steps)``), so
+#: that a new t_end or dt compiles nothing new within its bucket.
+_program = jit(_run, static_argnames=("budget",))
+_program_bdf = jit(_run_bdf, static_argnames=("budget",))
 SCHEMES = ("midpoint", "bdf2", "discrete-gradient")
 
 
@@ -241,8 +243,9 @@ def simulate(scene: Scene, state, t_end: float, dt: float, damping: float = 0.0,
     program = {"midpoint": _program, "bdf2": _program_bdf}.get(scheme)
     if program is None:
         from jaxrod.dynamics.discrete_gradient import run_discrete_gradient as program
-    q, kin, pot, angle, tangent, X, conv, res = jax.device_get(program(
-        path, disc, q0, p0, float(dt), steps, c, start, float(rate)))
+    q, kin, pot, angle, tangent, X, conv, res = (np.asarray(v)[:steps] for v in jax.device_get(
+        program(path, disc, q0, p0, float(dt), steps, c, start, float(rate),
+                budget=bucket(steps))))
     return Trajectory(time=dt * np.arange(1, steps + 1), states=np.asarray(q),
                       tip_angle_deg=np.degrees(angle), tip_tangent_deg=np.degrees(tangent),
                       tip_position=np.asarray(X), kinetic=np.asarray(kin),
