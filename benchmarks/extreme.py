@@ -31,7 +31,7 @@ D_EXP = 11.25 / 9.2
 
 
 def fold_count(G, M, D, n=16):
-    return len(jr.folds(jr.magnet_scene(G, M, D), n=n).folds)
+    return len(jr.folds(jr.magnet_scene(G, M, D), n=n, throw=False).folds)
 
 
 def cusp_magnet_group(G, D, lo=0.002, hi=0.0236, steps=30):
@@ -76,10 +76,10 @@ def run(quick: bool) -> dict:
     for name, G, M, D in cases:
         scene = jr.magnet_scene(G, M, D)
         t0 = time.perf_counter()
-        ref = jr.folds(scene, n=64)
+        ref = jr.folds(scene, n=64, throw=False)
         per_n = {}
         for n in degrees:
-            rep = jr.folds(scene, n=n)
+            rep = jr.folds(scene, n=n, throw=False)
             per_n[n] = [f.alpha_deg for f in rep.folds]
         ok = [n for n, a in per_n.items() if len(a) == len(ref.folds)
               and all(abs(x - f.alpha_deg) <= 1e-10 for x, f in zip(a, ref.folds))]

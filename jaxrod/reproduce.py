@@ -247,7 +247,7 @@ def permanent_magnet_report(n: int | None = None) -> dict:
                                   ("unrounded from material data",
                                    (rod.G, rod.M(NDFEB_MAGNET), rod.D(NDFEB_MAGNET)))):
             report = locate_folds(make_scene(g, m, d, 0.5 * NDFEB_MAGNET.diameter / rod.length),
-                                  n=n)
+                                  n=n, throw=False)
             folds = []
             for f in report.folds:
                 printed = PAPER_FOLDS[e_gpa][f.kind]
@@ -265,7 +265,7 @@ def permanent_magnet_report(n: int | None = None) -> dict:
                           "out_of_plane": branch_verdict(make_scene(g, m, d), report.branch,
                                                          report.folds, n)})
     G, M = PAPER_GROUPS[200]
-    sweep = hysteresis_sweep(make_scene(G, M, EXPERIMENT_D), n=n)
+    sweep = hysteresis_sweep(make_scene(G, M, EXPERIMENT_D), n=n, throw=False)
     return {"cases": cases, "reduced_route": reduced_route_report(cases, n),
             "sweep_E200": {"snaps": sweep["snaps"], "converged": sweep["converged"]},
             "_sweep_arrays": sweep}

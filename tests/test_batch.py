@@ -191,7 +191,7 @@ def test_near_the_cusp_every_answer_is_that_of_locate_folds():
     for i in range(K):
         if res.status[i] == NOT_CONVERGED:
             scene = magnet.make_scene(G[i], M[i], Ds[i])
-            assert not magnet_folds.locate_folds(scene, n=12).converged
+            assert not magnet_folds.locate_folds(scene, n=12, throw=False).converged
             continue
         rep = magnet_folds.locate_folds(magnet.make_scene(G[i], M[i], Ds[i]), n=16)
         kinds = {f.kind: f.alpha_deg for f in rep.folds}

@@ -171,9 +171,10 @@ def test_bad_input():
 
 
 def test_throw_turns_a_failure_into_a_solver_error(reports, monkeypatch):
-    """throw= on the paper's entry points: a converged answer passes; a report that is not
-    converged (a diagram cut short), a fold pair that does not exist and a sweep whose step
-    failed raise SolverError with NOT_CONVERGED instead of returning the flags."""
+    """throw= on the paper's entry points (True by default, as on every host entry point): a
+    converged answer passes; a report that is not converged (a diagram cut short), a fold
+    pair that does not exist and a sweep whose step failed raise SolverError with
+    NOT_CONVERGED, or with throw=False return the flags."""
     import dataclasses
 
     from jaxrod.status import SolverError, Status
@@ -183,18 +184,20 @@ def test_throw_turns_a_failure_into_a_solver_error(reports, monkeypatch):
     rep = reports[200]
     assert rep.status == Status.SUCCESS
     cut = dataclasses.replace(rep.branch, complete=False)
-    assert magnet_folds.locate_folds(scene, branch=cut).status == Status.NOT_CONVERGED
+    assert magnet_folds.locate_folds(scene, branch=cut, throw=False).status == \
+        Status.NOT_CONVERGED
     with pytest.raises(SolverError, match="did not reach its end") as err:
         magnet_folds.locate_folds(scene, branch=cut, throw=True)
     assert err.value.status == Status.NOT_CONVERGED
     assert magnet_folds.fold_pair(scene, throw=True)[1]
     no_folds = magnet.make_scene(2.2, 0.002, D_EXP)
-    assert not magnet_folds.fold_pair(no_folds)[1]
+    assert not magnet_folds.fold_pair(no_folds, throw=False)[1]
     with pytest.raises(SolverError, match="fold_pair"):
         magnet_folds.fold_pair(no_folds, throw=True)
     real = magnet_sweep._as_dict
     monkeypatch.setattr(magnet_sweep, "_as_dict",
                         lambda *a: real(*a) | {"converged": False})
-    assert not magnet_sweep.hysteresis_sweep(scene, alpha_max_deg=5.0)["converged"]
+    assert not magnet_sweep.hysteresis_sweep(scene, alpha_max_deg=5.0,
+                                             throw=False)["converged"]
     with pytest.raises(SolverError, match="hysteresis_sweep"):
-        magnet_sweep.hysteresis_sweep(scene, alpha_max_deg=5.0, throw=True)
+        magnet_sweep.hysteresis_sweep(scene, alpha_max_deg=5.0)  # throw: the default

@@ -228,7 +228,7 @@ def _start(point: DesignPoint, n: int) -> np.ndarray:
                                               disc))
     if converged:
         return np.concatenate([np.asarray(z), np.zeros((2, 1))], axis=1)
-    report = locate_folds(DipoleMagnet(G, M, D, 0.0), n=n)
+    report = locate_folds(DipoleMagnet(G, M, D, 0.0), n=n, throw=False)
     kinds = {f.kind: f for f in report.folds}
     if "lower" not in kinds or "upper" not in kinds or not report.converged:
         raise ParameterError(

@@ -29,7 +29,7 @@ def cmd_folds(args) -> int:
         return _folds_reduced(scene, info, args)
     from jaxrod.magnet.folds import locate_folds
 
-    report = locate_folds(scene, n=args.n)
+    report = locate_folds(scene, n=args.n, throw=False)
     out = info | report.as_dict()
     if not report.folds:
         out["note"] = NO_FOLD_NOTE
@@ -135,7 +135,7 @@ def cmd_branch(args) -> int:
     branch = trace_diagram(scene, args.n, figure_options())  # dense, for a smooth figure
     if not branch.complete:  # a long branch filled the capacity: the default steps
         branch = trace_diagram(scene, args.n)
-    report = locate_folds(scene, n=args.n, branch=branch)
+    report = locate_folds(scene, n=args.n, branch=branch, throw=False)
     report.branch.write_csv(out_dir / "branch.csv")
     diagram_figure(report).savefig(out_dir / "branch.png", dpi=120)
     summary = info | report.as_dict() | {"points": len(report.branch)}
@@ -183,7 +183,7 @@ def cmd_sweep(args) -> int:
             setattr(args, name, default)
     try:
         sweep = hysteresis_sweep(scene, n=args.n, alpha_max_deg=args.alpha_max,
-                                 step_deg=args.step, progress=not args.quiet)
+                                 step_deg=args.step, progress=not args.quiet, throw=False)
     except Interrupted as stop:
         sweep = stop.partial
         summary = info | {"snaps": sweep["snaps"], "converged": sweep["converged"],
@@ -193,7 +193,7 @@ def cmd_sweep(args) -> int:
         print(f"jaxrod sweep: {sweep['reason']}; wrote what was computed to "
               f"{out_dir / 'sweep.csv'} and sweep.json (marked incomplete)", file=sys.stderr)
         return 130
-    report = locate_folds(scene, n=args.n)
+    report = locate_folds(scene, n=args.n, throw=False)
     summary = info | {"snaps": sweep["snaps"], "converged": sweep["converged"],
                       "complete": True, "positions": int(sweep["alpha_deg"].size),
                       "folds": [f.as_dict() for f in report.folds],

@@ -416,7 +416,7 @@ def resolve_failures(G, M, D, alphas, status, tier, n: int = 12):
         retry = retry[code == NOT_CONVERGED]
     if retry.size:  # tier 4: one by one
         for i in retry:
-            rep = locate_folds(DipoleMagnet(G[i], M[i], D[i], 0.0), n=n)
+            rep = locate_folds(DipoleMagnet(G[i], M[i], D[i], 0.0), n=n, throw=False)
             tier[i] = 4
             kinds = {f.kind: f for f in rep.folds}
             if rep.converged and "lower" in kinds and "upper" in kinds:

@@ -195,14 +195,14 @@ def _fold_angles_program(G, M, D, n: int, tol: float):
     return jnp.where(converged, alphas, jnp.nan), converged
 
 
-def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13, throw: bool = False):
+def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13, throw: bool = True):
     """Fast path to (alpha_lower, alpha_upper) in degrees, and whether both converged.
 
     One compiled call of ``fold_angles``: continuation from the straight rod towards
     alpha > 0 that stops after the second fold, then both Moore-Spence solves (vmapped).
     N = 12 reaches the round-off floor at the paper's parameters (use ``locate_folds`` for
-    the full report and diagram). ``throw``: raise ``SolverError`` (NOT_CONVERGED) instead
-    of returning NaN angles with False.
+    the full report and diagram). ``throw`` (default, as every host entry point):
+    raise ``SolverError`` (NOT_CONVERGED); False: NaN angles with False.
     """
     alphas, converged = fold_angles(scene.G, scene.M, scene.D, n=n, tol=tol)
     if throw and not bool(converged):
@@ -272,7 +272,7 @@ class FoldReport:
 
 
 def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None = None,
-                 tol: float = 1e-13, throw: bool = False) -> FoldReport:
+                 tol: float = 1e-13, throw: bool = True) -> FoldReport:
     """Detect the folds on the diagram and refine those with alpha > 0.
 
     The two folds with alpha > 0 are named by their angle: ``upper`` (the engaged branch
@@ -284,8 +284,9 @@ def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None 
     d2F/dq2 != 0. Paper: Proposition ``thm:planar_fold``, Corollary ``cor:tip_angle_fold``;
     the numbers of Corollary ``cor:permanent_physical_parameters``.
 
-    ``throw``: raise ``SolverError`` (NOT_CONVERGED, naming the problems) where the report
-    is not converged (default: the report says so, ``converged`` and ``status``).
+    ``throw`` (default, as every host entry point): raise ``SolverError`` (NOT_CONVERGED,
+    naming the problems) where the report is not converged; False: the report says so
+    (``converged`` and ``status``).
     """
     disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     given = branch is not None

@@ -24,7 +24,7 @@ from jaxrod.status import SolverError, Status
 
 def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: float = 50.0,
                      step_deg: float = 0.25, progress: bool = False,
-                     throw: bool = False) -> dict:
+                     throw: bool = True) -> dict:
     """The experiment's protocol: alpha from -alpha_max to +alpha_max (clockwise), then back,
     as the generic quasi-static sweep (``jaxrod.equilibria.sweep``) of the paper's scene in
     the magnet's angle: at each position the previous state is continued by Newton; where it
@@ -35,8 +35,8 @@ def hysteresis_sweep(scene: DipoleMagnet, n: int = DEFAULT_N, alpha_max_deg: flo
 
     ``progress``: a progress bar. Ctrl-C raises ``jaxrod.progress.Interrupted`` whose
     ``partial`` is this dict for the positions done (``complete`` False, ``reason`` saying
-    where). ``throw``: raise ``SolverError`` (NOT_CONVERGED) if a step did not converge
-    (default: ``converged`` False in the dict).
+    where). ``throw`` (default, as every host entry point): raise ``SolverError``
+    (NOT_CONVERGED) if a step did not converge; False: ``converged`` False in the dict.
 
     Paper: the loop of eq. ``intro-hysteresis`` and Theorem ``thm:permanent_physical``
     (capture at the lower fold, release at the upper).
