@@ -24,17 +24,13 @@ from jaxrod.solvers.continuation import ContinuationOptions
 
 
 def with_special_points(scene: Scene | FileScene, b: Branch, n: int = DEFAULT_N,
-                        folds: list | None = None) -> Branch:
-    """``b`` with its folds (``folds``, or refined here) and branch points refined, in the
-    order met along it."""
-    folds = refine(scene, b, n) if folds is None else folds
+                        folds: list | None = None, met=None) -> Branch:
+    """``b`` with its folds (``folds`` detected at the branch indices ``met``, or refined
+    here) and branch points refined, in the order met along it."""
+    if folds is None:
+        folds, met = refine(scene, b, n), b.fold_indices
     points = folds + refine_branch_points(scene, b, n)
-    # where each was met: a fold at the branch's point nearest it (state and value)
-    theta, value = np.asarray(b.theta), np.asarray(b.value)
-    span = max(float(np.nanmax(value) - np.nanmin(value)), 1e-300)
-    at = [int(np.nanargmin(np.sqrt(np.mean((theta - f.state) ** 2, axis=1))
-                           + np.abs(value - f.value) / span)) for f in folds]
-    met = np.concatenate([np.asarray(at, float), stability_changes(b)])
+    met = np.concatenate([np.asarray(met, float), stability_changes(b)])
     return dataclasses.replace(b, special_points=tuple(
         points[i] for i in np.argsort(met, kind="stable")))
 
@@ -54,7 +50,7 @@ def branch(scene: Scene | FileScene, vary: str, start: float, stop: float,
     before kept). ``throw``: raise ``SolverError`` for a special point whose refinement did
     not converge (else its ``converged`` and ``status`` say so).
     """
-    b, found = traced_with_folds(scene, vary, start, stop, n, state, options, margins)
-    b = with_special_points(scene, b, n, found)
+    b, found, met = traced_with_folds(scene, vary, start, stop, n, state, options, margins)
+    b = with_special_points(scene, b, n, found, met)
     checked(list(b.special_points), "special point", throw)
     return b

@@ -112,16 +112,17 @@ NEAR_SINGULAR = 1e-2
 REFINE_STEP, RETRACES = 0.2, 2
 
 
-def _distinct(found: list[Fold], b: Branch) -> tuple[list[Fold], bool]:
+def _distinct(found: list[Fold], b: Branch) -> tuple[list[Fold], list[int]]:
     """The folds with each listed once (two starts can converge to one fold when two folds
-    lie within one step), and whether any was repeated."""
+    lie within one step), and the branch index where each kept one was detected."""
     span = _span(b)
-    out = []
-    for f in found:
+    out, met = [], []
+    for f, i in zip(found, b.fold_indices):
         if not any(abs(f.value - g.value) < 1e-7 * span and abs(f.q - g.q) < 1e-7
                    for g in out):
             out.append(f)
-    return out, len(out) < len(found)
+            met.append(int(i))
+    return out, met
 
 
 def _folds_may_hide(b: Branch, found: list[Fold]) -> bool:
@@ -139,17 +140,19 @@ def _folds_may_hide(b: Branch, found: list[Fold]) -> bool:
 
 def traced_with_folds(scene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
                       state=None, options=None, margins: dict | None = None):
-    """(the branch, its folds refined and listed once), traced again with finer steps where
-    folds may hide within a step (``folds``)."""
+    """(the branch, its folds refined and listed once, the branch index where each was
+    detected), traced again with finer steps where folds may hide within a step
+    (``folds``)."""
     options = options or branch_options()
     for _ in range(RETRACES + 1):
         b = trace(scene, vary, start, stop, n, state, options, margins=margins)
-        found, repeated = _distinct(refine(scene, b, n), b)
-        if not (repeated or _folds_may_hide(b, found)):
+        refined = refine(scene, b, n)
+        found, met = _distinct(refined, b)
+        if not (len(found) < len(refined) or _folds_may_hide(b, found)):
             break
         options = options._replace(ds_max=REFINE_STEP * options.ds_max,
                                    max_points=2 * options.max_points)
-    return b, found
+    return b, found, met
 
 
 def folds(scene: Scene | FileScene, vary: str, start: float, stop: float, n: int = DEFAULT_N,
@@ -167,7 +170,7 @@ def folds(scene: Scene | FileScene, vary: str, start: float, stop: float, n: int
     ``margins``: the magnets' radii by term name (``jaxrod.equilibria.trace.reach_along``).
     """
     start, stop = check_range(scene, vary, start, stop)
-    b, found = traced_with_folds(scene, vary, start, stop, n, state, margins=margins)
+    b, found, _ = traced_with_folds(scene, vary, start, stop, n, state, margins=margins)
     if throw and not b.complete:
         raise SolverError(next((s for s in b.status if not s.ok), Status.NOT_CONVERGED),
                           f"the branch along {vary} ended at {b.value[-1]:.6g}")
