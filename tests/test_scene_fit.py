@@ -62,6 +62,25 @@ def test_impossible_targets_are_reported(rail):
     assert not d.converged and "miss the targets" in d.reason
 
 
+def test_a_fit_starts_from_guesses_near_the_refined_folds(rail):
+    """The fit's start (``fold_guesses``: the branch without its spectrum, stopped after the
+    folds the data need) lies within one continuation step (ds_max = 0.05 of the range) of
+    each fold that ``folds`` refines; asked for more folds than the range holds it gives
+    what there is, and the fit says the data need more."""
+    from jaxrod.equilibria.folds import fold_guesses
+
+    file = load(rail, ["field.0.M=0.2", "field.0.position.1=1.22"])
+    key = "field0.position.0"
+    refined = jr.folds(file.scene, key, 0.0, 1.5)
+    z = fold_guesses(file.scene, key, 0.0, 1.5, 5)
+    assert len(z) == len(refined) == 2
+    for f, row in zip(refined, z):
+        assert abs(1.5 * row[-1] - f.value) <= 0.05 * 1.5
+    with pytest.raises(ParameterError, match="the data need 3"):
+        fit_folds(file.scene, key, (0.0, 1.5), [1.0, 0.98, 0.9], ["field0.M"],
+                  readout=[(0, 1), (1, 1), (2, 1)])
+
+
 @pytest.mark.parametrize("free, match", [(["field0.position.0"], "met along"),
                                          (["field0.Q"], "field0.Q"), ([], "at least one")])
 def test_bad_fit_requests(rail, free, match):

@@ -22,13 +22,21 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.tail import tail_estimate
-from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
+from jaxrod.equilibria.equilibrium import (
+    DEFAULT_N,
+    discretise,
+    mean_functional,
+    ramp,
+    solve_at,
+    tip,
+)
 from jaxrod.equilibria.record import Branch, SpecialPoint, checked
-from jaxrod.equilibria.trace import MODEL, NO_REST, branch_options, check_range, trace
+from jaxrod.equilibria.trace import MODEL, NO_REST, branch_options, check_range, path_of, trace
 from jaxrod.programs import jit, padded
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, along
 from jaxrod.scenes.scene import Scene
+from jaxrod.solvers.continuation import continuation_run
 from jaxrod.solvers.folds import fold_coefficients, moore_spence_solve
 from jaxrod.status import SolverError, Status
 
@@ -175,3 +183,41 @@ def folds(scene: Scene | FileScene, vary: str, start: float, stop: float, n: int
         raise SolverError(next((s for s in b.status if not s.ok), Status.NOT_CONVERGED),
                           f"the branch along {vary} ended at {b.value[-1]:.6g}")
     return checked(found, "fold", throw)
+
+
+#: Points of the run that looks for the first folds (``fold_guesses``).
+GUESS_CAPACITY = 256
+
+
+def _guess_program(path, disc, origin, span, count, opts):
+    x_ramp, *_ = ramp(path.at(jnp.reshape(origin, (1,))), disc)
+    args = (path, disc, origin, span, NO_REST)
+    start = solve_at(MODEL, x_ramp, 0.0, args).x
+    run = continuation_run(MODEL, start, 0.0, args, opts._replace(max_folds=count),
+                           GUESS_CAPACITY, 1.0, spectrum=False)
+    t = run.tangent_lam
+    change = t[:-1] * t[1:] < 0.0
+    i = jnp.nonzero(change, size=GUESS_CAPACITY - 1, fill_value=0)[0]
+    j = jnp.where(jnp.abs(t[i]) <= jnp.abs(t[i + 1]), i, i + 1)
+    z = jnp.concatenate([run.x[j], run.tangent_x[j], run.lam[j][:, None]], axis=1)
+    return z, jnp.sum(change), run.residual_norm[0] <= opts.tol
+
+
+_guesses = jit(_guess_program)
+
+
+def fold_guesses(scene: Scene | FileScene, vary: str, start: float, stop: float, count: int,
+                 n: int = DEFAULT_N) -> np.ndarray:
+    """Approximate first ``count`` folds met along ``vary`` from ``start`` to ``stop``, as
+    the rows z = (state, null-vector guess, lam) that a Moore-Spence solve starts from
+    (lam = (v - start) / (stop - start)): the branch from the ramped equilibrium at
+    ``start``, continued without its spectrum until ``count`` folds are passed; at the
+    recorded point nearest each the state part of the branch's tangent is the guess of the
+    Hessian's kernel. Fewer rows where fewer folds were met (or the start did not
+    converge). The cheap start of fits and designs: ``folds`` refines and reports them."""
+    start, stop = check_range(scene, vary, start, stop)
+    path, _ = path_of(scene, vary, start, stop)
+    disc = discretise(path.template, n)
+    z, found, ok = jax.device_get(_guesses(path, disc, start, stop - start, float(count),
+                                           branch_options(0)))
+    return z[:min(int(found), count)] if bool(ok) else z[:0]

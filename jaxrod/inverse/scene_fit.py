@@ -16,7 +16,8 @@ delta (``OFFSET``, when ``offset`` is True) minimise half of
 the second sum over the free inputs with a Gaussian ``Prior``, by the least-squares program
 of ``jaxrod.solvers.least_squares`` (optax L-BFGS direction, Armijo line search,
 Gauss-Newton scaling, so that inputs of any size are stepped alike). Each evaluation solves
-each fold's Moore-Spence system from the fold states of the last accepted point, implicitly
+each fold's Moore-Spence system from the fold states of the last accepted point (at the
+start, from the approximate folds of ``jaxrod.equilibria.folds.fold_guesses``), implicitly
 differentiated in p (``differentiable_fold``); a trial point where a solve fails, a fold
 leaves the range, the folds change their order, p leaves its bounds or a magnet enters the
 rod's reach is rejected. One compiled program per (scene structure, number of inputs, data,
@@ -40,7 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise
-from jaxrod.equilibria.folds import folds as scene_folds
+from jaxrod.equilibria.folds import fold_guesses
 from jaxrod.equilibria.trace import MODEL, check_range
 from jaxrod.inverse.fit_record import OFFSET, Prior, SceneFit, record
 from jaxrod.params import ParameterError, check_value
@@ -243,15 +244,12 @@ def _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n, readout,
                              "outside the bounds")
     n_folds = int(readout[:, 0].max()) + 1
     if z0 is None:
-        found = _remembered(("folds", here, vary, start, stop, n),
-                            lambda: scene_folds(scene, vary, start, stop, n, throw=False))
-        if len(found) < n_folds or not all(f.converged for f in found[:n_folds]):
-            raise ParameterError(f"the start has {len(found)} fold(s) along {vary} from "
+        z0 = _remembered(("folds", here, vary, start, stop, n, n_folds),
+                         lambda: fold_guesses(scene, vary, start, stop, n_folds, n))
+        if len(z0) < n_folds:
+            raise ParameterError(f"the start has {len(z0)} fold(s) along {vary} from "
                                  f"{start:g} to {stop:g}; the data need {n_folds}: start "
                                  "nearer the answer, or widen the range")
-        z0 = np.stack([np.concatenate([f.state, f.null_vector, [(f.value - start) /
-                                                                (stop - start)]])
-                       for f in found[:n_folds]])
     arrays = dict(path=path, disc=discretise(path.template, n), origin=start,
                   span=stop - start, z0=jnp.asarray(z0), p0=jnp.asarray(p0),
                   free=jnp.asarray(free_mask), sigma=float(sigma),
