@@ -22,16 +22,17 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.tail import tail_estimate
-from jaxrod.equilibria.equilibrium import (
-    DEFAULT_N,
-    discretise,
-    mean_functional,
-    ramp,
-    solve_at,
-    tip,
-)
+from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
 from jaxrod.equilibria.record import Branch, SpecialPoint, checked
-from jaxrod.equilibria.trace import MODEL, NO_REST, branch_options, check_range, path_of, trace
+from jaxrod.equilibria.trace import (
+    MODEL,
+    NO_REST,
+    branch_options,
+    check_range,
+    path_of,
+    start_state,
+    trace,
+)
 from jaxrod.programs import jit, padded
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, along
@@ -190,9 +191,8 @@ GUESS_CAPACITY = 256
 
 
 def _guess_program(path, disc, origin, span, count, opts):
-    x_ramp, *_ = ramp(path.at(jnp.reshape(origin, (1,))), disc)
     args = (path, disc, origin, span, NO_REST)
-    start = solve_at(MODEL, x_ramp, 0.0, args).x
+    start = start_state(path, disc, origin, span).x
     run = continuation_run(MODEL, start, 0.0, args, opts._replace(max_folds=count),
                            GUESS_CAPACITY, 1.0, spectrum=False)
     t = run.tangent_lam
@@ -214,7 +214,9 @@ def fold_guesses(scene: Scene | FileScene, vary: str, start: float, stop: float,
     ``start``, continued without its spectrum until ``count`` folds are passed; at the
     recorded point nearest each the state part of the branch's tangent is the guess of the
     Hessian's kernel. Fewer rows where fewer folds were met (or the start did not
-    converge). The cheap start of fits and designs: ``folds`` refines and reports them."""
+    converge). The cheap start of fits and designs: ``folds`` refines and reports them.
+    Unlike ``trace`` the run does not stop where a varied magnet enters the rod's reach: a
+    fit rejects a fold there (its clearance check), and says so."""
     start, stop = check_range(scene, vary, start, stop)
     path, _ = path_of(scene, vary, start, stop)
     disc = discretise(path.template, n)

@@ -122,11 +122,17 @@ def observe(path, disc, x, lam, origin, span, rest=NO_REST):
     return mean_functional(disc)(x), angle, MODEL.energy(x, lam, args), X
 
 
-def _branch_program(path, disc, origin, span, x0, given, opts, capacity):
+def start_state(path, disc, origin, span, x0=None, given=False):
+    """Newton's answer for the equilibrium at the path's ``origin`` (lam = 0; traceable):
+    from ``x0`` where ``given``, else from the state the loads' ramp reaches there."""
     x_ramp, *_ = ramp(path.at(jnp.reshape(origin, (1,))), disc)
+    x = x_ramp if x0 is None else jnp.where(given, x0, x_ramp)
+    return solve_at(MODEL, x, 0.0, (path, disc, origin, span, NO_REST))
+
+
+def _branch_program(path, disc, origin, span, x0, given, opts, capacity):
     args = (path, disc, origin, span, NO_REST)
-    start = jnp.where(given, x0, x_ramp)
-    start = solve_at(MODEL, start, 0.0, args).x
+    start = start_state(path, disc, origin, span, x0, given).x
     run = continuation_run(MODEL, start, 0.0, args, opts, capacity, 1.0)
     q, angle, energy, X = jax.vmap(
         lambda x, lam: observe(path, disc, x, lam, origin, span))(run.x, run.lam)
