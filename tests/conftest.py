@@ -24,6 +24,12 @@ if "JAXROD_TEST_CACHE" not in os.environ:
     os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.2")
 
 import jaxrod  # noqa: E402,F401  (sets float64)
+import jaxrod.cli  # noqa: E402
+
+# Command lines run in a test's own process (tests/command_line.py) share the programs that
+# the worker has compiled: they leave the store of exported programs off (JAX's persistent
+# cache is on from the environment above). The processes that tests start keep the store.
+jaxrod.cli._enable_compilation_cache = lambda: None
 
 #: Modules whose tests each run in their own subprocess: spread over the xdist workers one
 #: test at a time. Every other module stays on one worker, so that its module-scoped fixtures
@@ -34,8 +40,10 @@ SPREAD = {"test_benchmarks.py", "test_notebooks.py"}
 SLOW = SPREAD
 #: Tests of the slow tier: derivatives against finite differences or whole-energy autodiff
 #: beside the assembled ones the default tier checks (``test_engine``), spectral convergence
-#: sweeps, stress and interruption runs, the main job and the long command-line runs whose
-#: analyses the default tier checks in Python. CI runs them after the default tier.
+#: sweeps and the same check at other N, stress and interruption runs, the main job, the
+#: long command-line runs whose analyses the default tier checks in Python, and second cases
+#: of a behaviour the default tier checks once (a design in groups, eight devices beside
+#: four, other integrators' Kelvin-Voigt damping). CI runs them after the default tier.
 SLOW_TESTS = {
     "test_derivatives.py::test_assembled_derivatives_match_autodiff",
     "test_engine.py::test_the_papers_scenes_are_their_printed_energies",
@@ -75,6 +83,20 @@ SLOW_TESTS = {
     "test_engine.py::test_assembled_derivatives_equal_autodiff_of_the_whole_energy[3d]",
     "test_three_d.py::test_magnet_track_leaving_the_plane_snaps_where_the_planar_folds_are",
     "test_figures.py::test_fold_curve_figure",
+    "test_calibration.py::test_fold_derivatives_match_central_differences_of_fresh_continuations",
+    "test_calibration.py::test_design_with_groups",
+    "test_bad_inputs.py::test_sigint_keeps_the_partial_sweep",
+    "test_engine.py::test_two_folds_within_one_step_near_the_cusp_are_found[0.0001-16]",
+    "test_branch_points.py::test_the_opposed_field_buckles_the_cantilever_at_pi_squared_over_four"
+    "[8]",
+    "test_branch_points.py::test_the_opposed_field_buckles_the_cantilever_at_pi_squared_over_four"
+    "[12]",
+    "test_branch_points.py::test_the_opposed_field_buckles_the_cantilever_at_pi_squared_over_four"
+    "[24]",
+    "test_dynamics.py::test_kelvin_voigt_damps_a_mode_as_its_frequency_squared[midpoint]",
+    "test_dynamics.py::test_kelvin_voigt_damps_a_mode_as_its_frequency_squared[bdf2]",
+    "test_design_map.py::test_eight_devices_identical_to_one",
+    "test_figures.py::test_fold_curve_figure_shades_only_the_sweeps_bistability",
 }
 
 

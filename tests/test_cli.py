@@ -3,13 +3,9 @@ import subprocess
 import sys
 
 import pytest
+from command_line import run_cli
 
 from jaxrod.cli import main
-
-
-def run(*args):
-    return subprocess.run([sys.executable, "-m", "jaxrod.cli", *args], capture_output=True,
-                          text=True, timeout=600)
 
 
 def test_greenhill_json_keys(capsys):
@@ -47,14 +43,15 @@ def test_greenhill_physical_inputs(capsys):
     (["greenhill", "--G", "1", "--support", "hinged"], "support"),
 ])
 def test_bad_input_exit_2_one_line(argv, name):
-    proc = run(*argv)
+    proc = run_cli(*argv)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and name in lines[0], proc.stderr
 
 
 def test_reproduce_writes_report(tmp_path):
-    proc = run("reproduce", "--out", str(tmp_path))
+    proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "reproduce", "--out",
+                           str(tmp_path)], capture_output=True, text=True, timeout=3000)
     assert proc.returncode == 0, proc.stderr
     assert "tab:clamped" in proc.stdout and "MISMATCH" not in proc.stdout.split("## Permanent")[0]
     assert "Permanent magnet" in proc.stdout and (tmp_path / "hysteresis_E200.png").exists()
@@ -126,7 +123,7 @@ def test_sweep_and_branch_write_files(tmp_path, capsys):
     (["folds", "--G", "20", "--M", "0.01", "--D", "1.2", "--method", "reduced"], "2M/delta^3"),
 ])
 def test_magnet_bad_input_exit_2(argv, name):
-    proc = run(*argv)
+    proc = run_cli(*argv)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and name in lines[0], proc.stderr
@@ -195,7 +192,7 @@ def test_foldcurve_writes_files(tmp_path, capsys):
     (["foldcurve", *PAPER_POINT, "--vary", "D", "--to", "1.4", "--out", "/proc/nope"], "out"),
 ])
 def test_fold_curve_bad_input_exit_2(argv, name):
-    proc = run(*argv)
+    proc = run_cli(*argv)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and name in lines[0], proc.stderr

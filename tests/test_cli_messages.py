@@ -8,14 +8,10 @@ import subprocess
 import sys
 
 import pytest
+from command_line import run_cli
 
 import jaxrod as jr
 from jaxrod.cli import main
-
-
-def run(*args):
-    return subprocess.run([sys.executable, "-m", "jaxrod.cli", *args], capture_output=True,
-                          text=True, timeout=600)
 
 
 @pytest.mark.parametrize("argv, says", [
@@ -33,7 +29,7 @@ def run(*args):
       "remanence=8e5:-4e4"], "prior remanence: prior sd"),
 ])
 def test_one_line_that_names_the_problem(argv, says):
-    proc = run(*argv)
+    proc = run_cli(*argv)
     assert proc.returncode == 2, proc.stderr
     assert says in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
 

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from command_line import run_cli
 
 import jaxrod as jr
 from jaxrod.dynamics.integrate import simulate
@@ -176,16 +177,11 @@ def test_cli_snap_json(tmp_path):
     series as CSV, a figure and an animation of the rod."""
     import csv
     import json
-    import os
-    import subprocess
-    import sys
 
     files = {k: tmp_path / f"snap.{k}" for k in ("csv", "png", "gif")}
-    proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "snap", "--G", "2.2", "--M",
-                           "0.0236", "--D", "1.2228", "--fold", "upper", "--damping", "1",
-                           "--json", "--csv", str(files["csv"]), "--plot", str(files["png"]),
-                           "--animate", str(files["gif"])], capture_output=True, text=True,
-                          timeout=600, env={**os.environ, "JAXROD_NO_CACHE": "1"})
+    proc = run_cli("snap", "--G", "2.2", "--M", "0.0236", "--D", "1.2228", "--fold", "upper",
+                   "--damping", "1", "--json", "--csv", files["csv"], "--plot", files["png"],
+                   "--animate", files["gif"])
     assert proc.returncode == 0, proc.stderr
     rows = list(csv.DictReader(open(files["csv"])))
     assert files["png"].stat().st_size > 0 and files["gif"].read_bytes()[:3] == b"GIF"
@@ -234,14 +230,9 @@ def test_the_switching_lag_follows_the_folds_normal_form(damping, exponent):
 
 def test_cli_sweep_at_a_rate():
     import json
-    import os
-    import subprocess
-    import sys
 
-    proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "sweep", "--G", "2.2", "--M",
-                           "0.0236", "--D", "1.2228", "--rate", "0.1", "--damping", "10",
-                           "--from", "38.5", "--to", "41.5", "--json"], capture_output=True,
-                          text=True, timeout=600, env={**os.environ, "JAXROD_NO_CACHE": "1"})
+    proc = run_cli("sweep", "--G", "2.2", "--M", "0.0236", "--D", "1.2228", "--rate", "0.1",
+                   "--damping", "10", "--from", "38.5", "--to", "41.5", "--json")
     assert proc.returncode == 0, proc.stderr
     (switch,) = json.loads(proc.stdout)["switch_alpha_deg"]
     assert 39.31 < switch < 41.0  # after the static fold at 39.3134 degrees

@@ -98,11 +98,9 @@ def test_cli_fit_json(capsys):
     (["fit", "--angles", "-25", "38", "24", "-42", "--sigma-deg", "-1"], "sigma"),
 ])
 def test_cli_fit_bad_input(argv, name):
-    import subprocess
-    import sys
+    from command_line import run_cli
 
-    proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", *argv], capture_output=True,
-                          text=True, timeout=300)
+    proc = run_cli(*argv)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and name in lines[0], proc.stderr

@@ -4,12 +4,10 @@ eigenproblem, an independent method), and the soft mode at a fold."""
 
 import json
 import math
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from command_line import run_cli
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -108,10 +106,8 @@ def test_cli_modes_json(tmp_path):
     """The clamped rod's modes from the command line, with the damping ratios of a drag c
     and a Kelvin-Voigt eta (c / 2 omega + eta omega / 2 on the unloaded rod) and a figure of
     the shapes."""
-    proc = subprocess.run([sys.executable, "-m", "jaxrod.cli", "modes", "--G", "0", "--A", "0",
-                           "--json", "--damping", "0.5", "--kelvin-voigt", "1e-3", "--plot",
-                           str(tmp_path / "modes.png")], capture_output=True, text=True,
-                          timeout=600, env={**os.environ, "JAXROD_NO_CACHE": "1"})
+    proc = run_cli("modes", "--G", "0", "--A", "0", "--json", "--damping", "0.5",
+                   "--kelvin-voigt", "1e-3", "--plot", tmp_path / "modes.png")
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     omega = out["omega"]

@@ -6,11 +6,10 @@ import contextlib
 import io
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from command_line import run_cli as _cli
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, fsolve
 
@@ -204,12 +203,6 @@ def test_the_papers_rig_as_a_scene_file_gives_the_papers_folds(tmp_path):
     assert len(found) == len(paper.folds) == 2
     for f, p in zip(sorted(found, key=lambda f: f.value), paper.folds):
         assert abs(f.value / factor - p.alpha_deg) <= 1e-10
-
-
-def _cli(*argv):
-    return subprocess.run([sys.executable, "-m", "jaxrod.cli", *argv], capture_output=True,
-                          text=True, timeout=600, env={**__import__("os").environ,
-                                                       "JAXROD_NO_CACHE": "1"})
 
 
 def test_cli_equilibrium_and_folds_on_a_scene_file(cantilever):
