@@ -80,23 +80,6 @@ def check_value(name: str, value, ok, requirement: str) -> float:
     return x
 
 
-def check_positive(name: str, value, unit: str = "") -> float:
-    """Return ``value`` as a float if it is a finite number > 0, else raise."""
-    return check_value(name, value, lambda x: x > 0.0,
-                       f"a finite number > 0{' ' + unit if unit else ''}")
-
-
-def check_nonnegative(name: str, value, unit: str = "") -> float:
-    """Return ``value`` as a float if it is a finite number >= 0, else raise."""
-    return check_value(name, value, lambda x: x >= 0.0,
-                       f"a finite number >= 0{' ' + unit if unit else ''}")
-
-
-def check_finite(name: str, value) -> float:
-    """Return ``value`` as a float if it is finite, else raise."""
-    return check_value(name, value, lambda x: True, "a finite number")
-
-
 @dataclasses.dataclass(frozen=True)
 class ValidRange:
     """The values one input may take: an interval, with the reason for its bounds.

@@ -177,7 +177,8 @@ def test_resume_after_kill_loses_nothing(reference, tmp_path):
 
 def test_eight_devices_identical_to_one(reference, tmp_path):
     out = tmp_path / "eight"
-    env = os.environ | {"XLA_FLAGS": "--xla_force_host_platform_device_count=8"}
+    env = os.environ | {"XLA_FLAGS": os.environ.get("XLA_FLAGS", "")
+                        + " --xla_force_host_platform_device_count=8"}
     code = ("import jax, json; from jaxrod.cli import main; import sys; "
             "assert len(jax.local_devices()) == 8; "
             f"sys.exit(main({[*CLI[3:], '--out', str(out)]!r}))")

@@ -105,7 +105,8 @@ print(json.dumps({{"count": m.count.tolist(), "status": m.status.tolist(),
 
 
 def test_four_devices_give_the_map_of_one(in_memory):
-    env = os.environ | {"XLA_FLAGS": "--xla_force_host_platform_device_count=4",
+    env = os.environ | {"XLA_FLAGS": os.environ.get("XLA_FLAGS", "")
+                        + " --xla_force_host_platform_device_count=4",
                         "JAX_PLATFORMS": "cpu"}
     code = DEVICES.format(tests=str(Path(__file__).parent))
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
