@@ -72,8 +72,8 @@ def test_a_fit_starts_from_guesses_near_the_refined_folds(rail):
     file = load(rail, ["field.0.M=0.2", "field.0.position.1=1.22"])
     key = "field0.position.0"
     refined = jr.folds(file.scene, key, 0.0, 1.5)
-    z = fold_guesses(file.scene, key, 0.0, 1.5, 5)
-    assert len(z) == len(refined) == 2
+    z, status = fold_guesses(file.scene, key, 0.0, 1.5, 5)
+    assert len(z) == len(refined) == 2 and status.ok
     for f, row in zip(refined, z):
         assert abs(1.5 * row[-1] - f.value) <= 0.05 * 1.5
     with pytest.raises(ParameterError, match="the data need 3"):

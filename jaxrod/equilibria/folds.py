@@ -200,26 +200,29 @@ def _guess_program(path, disc, origin, span, count, opts):
     i = jnp.nonzero(change, size=GUESS_CAPACITY - 1, fill_value=0)[0]
     j = jnp.where(jnp.abs(t[i]) <= jnp.abs(t[i + 1]), i, i + 1)
     z = jnp.concatenate([run.x[j], run.tangent_x[j], run.lam[j][:, None]], axis=1)
-    return z, jnp.sum(change), run.residual_norm[0] <= opts.tol
+    status = jnp.where(run.residual_norm[0] <= opts.tol, run.status, int(Status.NOT_CONVERGED))
+    return z, jnp.sum(change), status
 
 
 _guesses = jit(_guess_program)
 
 
 def fold_guesses(scene: Scene | FileScene, vary: str, start: float, stop: float, count: int,
-                 n: int = DEFAULT_N) -> np.ndarray:
+                 n: int = DEFAULT_N) -> tuple[np.ndarray, Status]:
     """Approximate first ``count`` folds met along ``vary`` from ``start`` to ``stop``, as
     the rows z = (state, null-vector guess, lam) that a Moore-Spence solve starts from
     (lam = (v - start) / (stop - start)): the branch from the ramped equilibrium at
     ``start``, continued without its spectrum until ``count`` folds are passed; at the
     recorded point nearest each the state part of the branch's tangent is the guess of the
-    Hessian's kernel. Fewer rows where fewer folds were met (or the start did not
-    converge). The cheap start of fits and designs: ``folds`` refines and reports them.
+    Hessian's kernel. Returns the rows and why the run ended (``NOT_CONVERGED`` where the
+    start did not converge: no rows then); fewer rows where fewer folds were met. The cheap
+    start of fits and designs: ``folds`` refines and reports them.
     Unlike ``trace`` the run does not stop where a varied magnet enters the rod's reach: a
     fit rejects a fold there (its clearance check), and says so."""
     start, stop = check_range(scene, vary, start, stop)
     path, _ = path_of(scene, vary, start, stop)
     disc = discretise(path.template, n)
-    z, found, ok = jax.device_get(_guesses(path, disc, start, stop - start, float(count),
-                                           branch_options(0)))
-    return z[:min(int(found), count)] if bool(ok) else z[:0]
+    z, found, status = jax.device_get(_guesses(path, disc, start, stop - start,
+                                               float(count), branch_options(0)))
+    status = Status(int(status))
+    return (z[:min(int(found), count)] if status.ok else z[:0]), status

@@ -244,12 +244,13 @@ def _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n, readout,
                              "outside the bounds")
     n_folds = int(readout[:, 0].max()) + 1
     if z0 is None:
-        z0 = _remembered(("folds", here, vary, start, stop, n, n_folds),
-                         lambda: fold_guesses(scene, vary, start, stop, n_folds, n))
+        z0, status = _remembered(("folds", here, vary, start, stop, n, n_folds),
+                                 lambda: fold_guesses(scene, vary, start, stop, n_folds, n))
         if len(z0) < n_folds:
+            why = "" if status.ok else f" (the branch stopped: {status})"
             raise ParameterError(f"the start has {len(z0)} fold(s) along {vary} from "
-                                 f"{start:g} to {stop:g}; the data need {n_folds}: start "
-                                 "nearer the answer, or widen the range")
+                                 f"{start:g} to {stop:g}{why}; the data need {n_folds}: "
+                                 "start nearer the answer, or widen the range")
     arrays = dict(path=path, disc=discretise(path.template, n), origin=start,
                   span=stop - start, z0=jnp.asarray(z0), p0=jnp.asarray(p0),
                   free=jnp.asarray(free_mask), sigma=float(sigma),
