@@ -7,6 +7,11 @@ eigenvalue positive) within an RMS distance 0.1 of x_{k-1}; otherwise a fold was
 the rod *snaps*: the energy E(.; lam_k) is descended from x_{k-1} to the stable state it
 falls into (``jaxrod.solvers.descent``). The values run in compiled chunks (``lax.scan``),
 progress and Ctrl-C acting between them.
+
+The first state is reached the same way: the loads ramped quasi-statically from zero
+(``Scene.load_scale`` from 0 to 1 in ``CHUNK`` steps from the unloaded straight rod, the
+rod snapping where its loaded equilibrium ceases to exist), by the same compiled program
+as the sweep itself.
 """
 
 from __future__ import annotations
@@ -18,13 +23,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, equilibrium, solve_at, tip
+from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, solve_at, tip
 from jaxrod.equilibria.trace import MODEL, NO_REST, path_of
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.progress import Interrupted, interrupt_requested, progress_bar
 from jaxrod.scenes.files import FileScene
-from jaxrod.scenes.path import ALONG
+from jaxrod.scenes.path import ALONG, along
 from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.descent import descend
 
@@ -67,6 +72,21 @@ def _chunk_program(x0, values, path, disc):
 
 
 _chunk = jit(_chunk_program)
+
+
+def _start(scene: Scene, disc, state) -> tuple[jax.Array, bool]:
+    """(the state at the first value, whether every step to it converged): ``state`` as
+    given (the sweep's first step continues it by Newton), or the loads ramped from zero
+    through ``_chunk`` along ``load_scale`` (module docstring)."""
+    if state is not None:
+        x0 = jnp.asarray(state, jnp.float64)
+        if x0.shape != (disc.size,):
+            raise ValueError(f"state has shape {x0.shape}; this discretisation needs "
+                             f"({disc.size},)")
+        return x0, True
+    loads = along(scene, ("load_scale",))
+    x, _, _, ok, _ = _chunk(jnp.zeros(disc.size), np.linspace(0.0, 1.0, CHUNK), loads, disc)
+    return x, bool(jnp.all(ok))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,8 +132,7 @@ def sweep(scene: Scene | FileScene, vary: str, values, n: int = DEFAULT_N, state
         raise ParameterError(f"values of {vary}: at least two finite values, got {values.size}")
     path, _ = path_of(scene, vary, float(values.min()), float(values.max()))
     disc = discretise(path.template, n)
-    start = equilibrium(path.at_host(float(values[0])), n, state=state)
-    x = jnp.asarray(start.state)
+    x, started = _start(path.at_host(float(values[0])), disc, state)
     parts = []
     bar = progress_bar(values.size, "sweep", unit="value", enabled=progress)
 
@@ -134,7 +153,7 @@ def sweep(scene: Scene | FileScene, vary: str, values, n: int = DEFAULT_N, state
             k = chunk.size
             # the state after the last real value (padding repeats it: the same state)
             x = jnp.asarray(xs[k - 1])
-            parts.append((xs[:k], snapped[:k], ok[:k] & start.converged, angle[:k], X[:k]))
+            parts.append((xs[:k], snapped[:k], ok[:k] & started, angle[:k], X[:k]))
             done += k
             bar.update(k)
             if interrupt_requested() and done < values.size:
