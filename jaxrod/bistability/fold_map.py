@@ -22,15 +22,15 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.bistability.grid_store import GridAxis, GridStore, Variable, read
-from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, ramp
-from jaxrod.equilibria.trace import MODEL, check_range
+from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise
+from jaxrod.equilibria.trace import MODEL, check_range, run_from_rest
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit, padded
 from jaxrod.progress import Interrupted, interrupt_requested, progress_bar
 from jaxrod.scenes.files import FileScene
-from jaxrod.scenes.path import ALONG, along
+from jaxrod.scenes.path import along
 from jaxrod.scenes.scene import Scene
-from jaxrod.solvers.continuation import REACHED_BOUND, ContinuationOptions, continuation_run
+from jaxrod.solvers.continuation import REACHED_BOUND, ContinuationOptions
 from jaxrod.solvers.folds import moore_spence_solve
 from jaxrod.status import Status
 
@@ -99,9 +99,11 @@ class FoldMap:
 
 def _point(xv, yv, path, disc, origin, span):
     model = MODEL
-    args = (path, disc, origin, span, jnp.stack([xv, yv]))
-    x0, ok0, *_ = ramp(ALONG(0.0, args)[0], disc)
-    run = continuation_run(model, x0, 0.0, args, OPTIONS, CAPACITY, 1.0, spectrum=False)
+    rest = jnp.stack([xv, yv])
+    args = (path, disc, origin, span, rest)
+    run, start = run_from_rest(path, disc, origin, span, OPTIONS, CAPACITY, rest=rest,
+                               spectrum=False)
+    ok0 = start.converged
     t = run.tangent_lam
     valid = jnp.arange(CAPACITY - 1) < run.num_points - 1
     change = valid & (jnp.sign(t[:-1]) * jnp.sign(t[1:]) < 0)

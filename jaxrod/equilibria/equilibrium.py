@@ -98,22 +98,27 @@ def solve_at(model, x0, lam, args, tol=1e-12):
     return newton(_residual, x0, (lam, model, args), tol=tol, jacobian=_jacobian)
 
 
+def loaded(model, run, args, snapped):
+    """The state at full load (lam = 1) from a run of the loads' ramp: where it folded
+    (``snapped``) the energy descended from the fold (the snap), else the run's last two
+    points interpolated to lam = 1 (Newton's start there; traceable)."""
+    k = run.num_points - 1
+    j = jnp.maximum(k - 1, 0)
+    w = jnp.clip((1.0 - run.lam[j]) / (run.lam[k] - run.lam[j]), 0.0, 1.0)
+    x_mid = run.x[j] + w * (run.x[k] - run.x[j])
+    return jax.lax.cond(snapped, lambda x: descend(model, x, args, lam=1.0).x, lambda x: x,
+                        jnp.where(snapped, run.x[k], x_mid))
+
+
 def ramp(scene: Scene, disc) -> tuple:
     """(x, converged, residual, iterations, status code) at full load (traceable)."""
     args = (scene, disc, 0.0, 1.0)
     x0 = jnp.zeros(disc.size, disc.quad_weights.dtype)
     run = continuation_run(LOAD, x0, 0.0, args, RAMP_OPTIONS, RAMP_CAPACITY, 1.0,
                            spectrum=False)
-    k = run.num_points - 1
     snapped = run.status == FOLDS_FOUND
     reached = run.status == REACHED_BOUND
-    j = jnp.maximum(k - 1, 0)
-    w = jnp.clip((1.0 - run.lam[j]) / (run.lam[k] - run.lam[j]), 0.0, 1.0)
-    x_mid = run.x[j] + w * (run.x[k] - run.x[j])
-    x_start = jax.lax.cond(
-        snapped, lambda x: descend(LOAD, x, args, lam=1.0).x, lambda x: x,
-        jnp.where(snapped, run.x[k], x_mid))
-    res = solve_at(LOAD, x_start, 1.0, args)
+    res = solve_at(LOAD, loaded(LOAD, run, args, snapped), 1.0, args)
     status = jnp.where(~res.converged, int(Status.NOT_CONVERGED),
                        jnp.where(snapped, int(Status.SNAPPED_WHILE_LOADING),
                                  jnp.where(reached, int(Status.SUCCESS),

@@ -30,14 +30,13 @@ from jaxrod.equilibria.trace import (
     branch_options,
     check_range,
     path_of,
-    start_state,
+    run_from_rest,
     trace,
 )
 from jaxrod.programs import jit, padded
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, along
 from jaxrod.scenes.scene import Scene
-from jaxrod.solvers.continuation import continuation_run
 from jaxrod.solvers.folds import fold_coefficients, moore_spence_solve
 from jaxrod.status import SolverError, Status
 
@@ -191,10 +190,8 @@ GUESS_CAPACITY = 256
 
 
 def _guess_program(path, disc, origin, span, count, opts):
-    args = (path, disc, origin, span, NO_REST)
-    start = start_state(path, disc, origin, span).x
-    run = continuation_run(MODEL, start, 0.0, args, opts._replace(max_folds=count),
-                           GUESS_CAPACITY, 1.0, spectrum=False)
+    run, _ = run_from_rest(path, disc, origin, span, opts._replace(max_folds=count),
+                           GUESS_CAPACITY, spectrum=False)
     t = run.tangent_lam
     change = t[:-1] * t[1:] < 0.0
     i = jnp.nonzero(change, size=GUESS_CAPACITY - 1, fill_value=0)[0]

@@ -18,9 +18,10 @@ import numpy as np
 from jaxrod.derivatives import Structured
 from jaxrod.equilibria.equilibrium import (
     DEFAULT_N,
+    RAMP_OPTIONS,
     discretise,
+    loaded,
     mean_functional,
-    ramp,
     solve_at,
     tip,
 )
@@ -31,7 +32,7 @@ from jaxrod.scenes.checks import check_scene, rebuild
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, Path, along
 from jaxrod.scenes.scene import Scene
-from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
+from jaxrod.solvers.continuation import FOLDS_FOUND, ContinuationOptions, continuation_run
 from jaxrod.status import Status
 
 
@@ -122,18 +123,35 @@ def observe(path, disc, x, lam, origin, span, rest=NO_REST):
     return mean_functional(disc)(x), angle, MODEL.energy(x, lam, args), X
 
 
-def start_state(path, disc, origin, span, x0=None, given=False):
-    """Newton's answer for the equilibrium at the path's ``origin`` (lam = 0; traceable):
-    from ``x0`` where ``given``, else from the state the loads' ramp reaches there."""
-    x_ramp, *_ = ramp(path.at(jnp.reshape(origin, (1,))), disc)
-    x = x_ramp if x0 is None else jnp.where(given, x0, x_ramp)
-    return solve_at(MODEL, x, 0.0, (path, disc, origin, span, NO_REST))
+def run_from_rest(path, disc, origin, span, opts, capacity, rest=NO_REST, x0=None,
+                  given=False, spectrum=True):
+    """The continuation run along the path from the equilibrium at its ``origin`` (lam = 0),
+    and Newton's answer there (traceable): that equilibrium is Newton's from ``x0`` where
+    ``given``, else from the state reached by ramping the loads from zero (``RAMP_OPTIONS``;
+    where the ramp folds, the energy descended at full load: ``loaded``). The ramp is the
+    same continuation program on the path along the load scale (``Path.loading``), the two
+    runs one ``lax.scan``: the program compiles the continuation once."""
+    ramp_path = path.loading(jnp.concatenate([jnp.reshape(origin, (1,)), rest]))
+    stack = lambda *v: jnp.stack([jnp.asarray(u, jnp.float64) for u in v])
+    phases = (jax.tree_util.tree_map(stack, ramp_path, path), stack(0.0, origin),
+              stack(1.0, span), jax.tree_util.tree_map(stack, RAMP_OPTIONS, opts),
+              jnp.array([False, True]))
+    x0 = jnp.zeros(disc.size) if x0 is None else x0
+
+    def phase(x, data):
+        p, o, sp, op, main = data
+        args = (p, disc, o, sp, rest)
+        start = solve_at(MODEL, x, 0.0, args)
+        run = continuation_run(MODEL, start.x, 0.0, args, op, capacity, 1.0, spectrum)
+        ramped = loaded(MODEL, run, args, (run.status == FOLDS_FOUND) & ~main)
+        return jnp.where(given, x0, ramped), (run, start)
+
+    _, (runs, starts) = jax.lax.scan(phase, jnp.zeros(disc.size), phases)
+    return jax.tree_util.tree_map(lambda v: v[1], (runs, starts))
 
 
 def _branch_program(path, disc, origin, span, x0, given, opts, capacity):
-    args = (path, disc, origin, span, NO_REST)
-    start = start_state(path, disc, origin, span, x0, given).x
-    run = continuation_run(MODEL, start, 0.0, args, opts, capacity, 1.0)
+    run, _ = run_from_rest(path, disc, origin, span, opts, capacity, x0=x0, given=given)
     q, angle, energy, X = jax.vmap(
         lambda x, lam: observe(path, disc, x, lam, origin, span))(run.x, run.lam)
     return run, (q, angle, energy), X
