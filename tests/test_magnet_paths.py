@@ -81,7 +81,7 @@ def test_an_equilibrium_whose_ramp_stopped_short_is_not_converged(monkeypatch):
     agrees (it said True beside that status, and the command line exited 0)."""
     from jaxrod.equilibria import equilibrium as module
 
-    monkeypatch.setattr(module, "RAMP_CAPACITY", 3)
+    monkeypatch.setattr(module, "CAPACITY", 3)
     scene = jr.Scene({"bending": jr.Bending(), "field": Zeeman(5.0, 1.0)})
     eq = jr.equilibrium(scene, n=7, throw=False)  # a degree no other test traces
     assert eq.status == Status.NOT_CONVERGED and eq.converged is False

@@ -16,9 +16,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, tip
+from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise, tip
 from jaxrod.equilibria.folds import Fold, folds
-from jaxrod.equilibria.trace import MODEL, check_range
+from jaxrod.equilibria.trace import check_range
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.files import FileScene

@@ -22,8 +22,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.bistability.grid_store import GridAxis, GridStore, Variable, read
-from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise
-from jaxrod.equilibria.trace import MODEL, check_range, run_from_rest
+from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise, run_from_rest
+from jaxrod.equilibria.trace import check_range
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit, padded
 from jaxrod.progress import Interrupted, interrupt_requested, progress_bar
@@ -101,8 +101,8 @@ def _point(xv, yv, path, disc, origin, span):
     model = MODEL
     rest = jnp.stack([xv, yv])
     args = (path, disc, origin, span, rest)
-    run, start = run_from_rest(path, disc, origin, span, OPTIONS, CAPACITY, rest=rest,
-                               spectrum=False)
+    run, start, _ = run_from_rest(path, disc, origin, span, OPTIONS, CAPACITY, rest=rest,
+                                  spectrum=False)
     ok0 = start.converged
     t = run.tangent_lam
     valid = jnp.arange(CAPACITY - 1) < run.num_points - 1

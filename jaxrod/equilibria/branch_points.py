@@ -31,18 +31,18 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.tail import tail_estimate
-from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
-from jaxrod.equilibria.folds import _span
-from jaxrod.equilibria.record import Branch, SpecialPoint, branch_from_runs, checked
-from jaxrod.equilibria.trace import (
+from jaxrod.equilibria.equilibrium import (
+    DEFAULT_N,
     MODEL,
     NO_REST,
-    branch_options,
-    check_range,
+    discretise,
+    mean_functional,
     observe,
-    path_of,
-    trace,
+    tip,
 )
+from jaxrod.equilibria.folds import _span
+from jaxrod.equilibria.record import Branch, SpecialPoint, branch_from_runs, checked
+from jaxrod.equilibria.trace import branch_options, check_range, path_of, trace
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit, padded
 from jaxrod.scenes.path import ALONG, along

@@ -26,7 +26,8 @@ from jaxrod.params import check_degree
 from jaxrod.programs import jit
 from jaxrod.scenes.checks import check_scene
 from jaxrod.scenes.files import FileScene
-from jaxrod.scenes.scene import Input, Scene
+from jaxrod.scenes.path import ALONG, scene_path
+from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.continuation import (
     FOLDS_FOUND,
     REACHED_BOUND,
@@ -41,15 +42,17 @@ from jaxrod.status import Status, check
 #: from N = 12; 16 keeps a margin).
 DEFAULT_N = 16
 
-#: The load scale as continuation parameter.
-LOAD = Structured(Input("load_scale"))
-
 #: Steps of at most 0.05 in the load scale's arclength: near an imperfect pitchfork (a field
 #: almost opposite a hard-magnetic rod's magnetisation, with gravity) steps of 0.2 cut the
 #: branch's sharp turn and land on the unstable near-straight branch.
 RAMP_OPTIONS = ContinuationOptions(ds=0.05, ds_min=1e-8, ds_max=0.05, lam_max=1.0, tol=1e-12,
                                    max_folds=1, max_points=0)
-RAMP_CAPACITY = 200
+#: Points of a run (the ramp's and the branch's) in ``path_program``.
+CAPACITY = 400
+#: The equilibrium's run along the load scale past full load ends at its first step: the
+#: program's second run (``run_from_rest``) reports the equilibrium at its origin.
+STAY = ContinuationOptions(ds=0.01, ds_min=1e-9, ds_max=0.05, lam_min=0.0, lam_max=0.0,
+                           tol=1e-12, max_points=0)
 
 
 def discretise(scene: Scene, n: int):
@@ -110,20 +113,68 @@ def loaded(model, run, args, snapped):
                         jnp.where(snapped, run.x[k], x_mid))
 
 
-def ramp(scene: Scene, disc) -> tuple:
-    """(x, converged, residual, iterations, status code) at full load (traceable)."""
-    args = (scene, disc, 0.0, 1.0)
-    x0 = jnp.zeros(disc.size, disc.quad_weights.dtype)
-    run = continuation_run(LOAD, x0, 0.0, args, RAMP_OPTIONS, RAMP_CAPACITY, 1.0,
-                           spectrum=False)
-    snapped = run.status == FOLDS_FOUND
-    reached = run.status == REACHED_BOUND
-    res = solve_at(LOAD, loaded(LOAD, run, args, snapped), 1.0, args)
-    status = jnp.where(~res.converged, int(Status.NOT_CONVERGED),
-                       jnp.where(snapped, int(Status.SNAPPED_WHILE_LOADING),
-                                 jnp.where(reached, int(Status.SUCCESS),
-                                           int(Status.NOT_CONVERGED))))
-    return res.x, res.converged, res.residual_norm, res.iterations, status
+#: The equilibria's model along a path (``jaxrod.scenes.path``): one for every key.
+MODEL = Structured(ALONG)
+NO_REST = np.zeros(0)
+
+
+def observe(path, disc, x, lam, origin, span, rest=NO_REST):
+    """(q, tip angle, energy, tip position) at a point (x, lam) of a branch (traceable)."""
+    args = (path, disc, origin, span, rest)
+    at, _ = ALONG(lam, args)
+    angle, X = tip(at, x, disc)
+    return mean_functional(disc)(x), angle, MODEL.energy(x, lam, args), X
+
+
+def run_from_rest(path, disc, origin, span, opts, capacity, rest=NO_REST, x0=None,
+                  given=False, spectrum=True):
+    """The continuation run along the path from the equilibrium at its ``origin`` (lam = 0),
+    Newton's answer there and the ramp's status code (``SUCCESS``; ``SNAPPED_WHILE_LOADING``
+    where it folded; else ``NOT_CONVERGED``; traceable): that equilibrium is Newton's from
+    ``x0`` where ``given``, else from the state reached by ramping the loads from zero
+    (``RAMP_OPTIONS``; where the ramp folds, the energy descended at full load:
+    ``loaded``). The ramp is the same continuation on the path along the load scale
+    (``Path.loading``), the two runs one ``lax.scan``: the program compiles it once."""
+    ramp_path = path.loading(jnp.concatenate([jnp.reshape(origin, (1,)), rest]))
+    stack = lambda *v: jnp.stack([jnp.asarray(u, jnp.float64) for u in v])
+    phases = (jax.tree_util.tree_map(stack, ramp_path, path), stack(0.0, origin),
+              stack(1.0, span), jax.tree_util.tree_map(stack, RAMP_OPTIONS, opts),
+              jnp.array([False, True]))
+    x0 = jnp.zeros(disc.size) if x0 is None else x0
+
+    def phase(x, data):
+        p, o, sp, op, main = data
+        args = (p, disc, o, sp, rest)
+        start = solve_at(MODEL, x, 0.0, args)
+        run = continuation_run(MODEL, start.x, 0.0, args, op, capacity, 1.0, spectrum)
+        ramped = loaded(MODEL, run, args, (run.status == FOLDS_FOUND) & ~main)
+        return jnp.where(given, x0, ramped), (run, start)
+
+    _, (runs, starts) = jax.lax.scan(phase, jnp.zeros(disc.size), phases)
+    ramp_status = runs.status[0]
+    code = jnp.where(given | (ramp_status == REACHED_BOUND), int(Status.SUCCESS),
+                     jnp.where(ramp_status == FOLDS_FOUND, int(Status.SNAPPED_WHILE_LOADING),
+                               int(Status.NOT_CONVERGED)))
+    run, start = jax.tree_util.tree_map(lambda v: v[1], (runs, starts))
+    return run, start, code
+
+
+def _path_program(path, disc, origin, span, x0, given, opts, capacity):
+    """The run along the path from the equilibrium at its origin (``run_from_rest``), its
+    points observed (q, tip angle, energy; tip position), and at the origin: Newton's
+    report, the ramp's status code and the tip's tangent angle."""
+    run, start, ramp_code = run_from_rest(path, disc, origin, span, opts, capacity, x0=x0,
+                                          given=given)
+    q, angle, energy, X = jax.vmap(
+        lambda x, lam: observe(path, disc, x, lam, origin, span))(run.x, run.lam)
+    tangent = tip_tangent(ALONG(0.0, (path, disc, origin, span, NO_REST))[0], start.x, disc)
+    return run, (q, angle, energy), X, (start.converged, start.residual_norm,
+                                         start.iterations, ramp_code, tangent)
+
+
+#: The one program of a scene's structure and N along any path: the equilibrium
+#: (``equilibrium``), the branch (``jaxrod.equilibria.trace``) and the fold guesses.
+path_program = jit(_path_program, static_argnames=("capacity",))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -172,28 +223,6 @@ def _given(lam, args):
 FIXED = Structured(_given)
 
 
-def _report(scene, disc, x):
-    model = FIXED
-    H = model.hessian(x, 0.0, (scene, disc))
-    angle, X = tip(scene, x, disc)
-    return (angle, X, tip_tangent(scene, x, disc), model.energy(x, 0.0, (scene, disc)),
-            jnp.linalg.eigvalsh(H)[0])
-
-
-@jit
-def _ramped(scene, disc):
-    x, conv, res, it, status = ramp(scene, disc)
-    return (x, conv, res, it, status), _report(scene, disc, x)
-
-
-@jit
-def _continued(scene, disc, x0):
-    res = solve_at(FIXED, x0, 0.0, (scene, disc))
-    status = jnp.where(res.converged, int(Status.SUCCESS), int(Status.NOT_CONVERGED))
-    return (res.x, res.converged, res.residual_norm, res.iterations, status), \
-        _report(scene, disc, res.x)
-
-
 def equilibrium(scene: Scene | FileScene, n: int = DEFAULT_N, state=None,
                 throw: bool = True) -> Equilibrium:
     """The equilibrium of ``scene`` (a ``Scene`` or a rig from ``jaxrod.load_scene``) reached
@@ -210,20 +239,20 @@ def equilibrium(scene: Scene | FileScene, n: int = DEFAULT_N, state=None,
         scene, margins = scene.scene, scene.margins
     check_scene(scene, margins)
     disc = discretise(scene, n)
-    if state is None:
-        (x, conv, res, it, status), rep = jax.device_get(_ramped(scene, disc))
-    else:
-        x0 = jnp.asarray(state, jnp.float64)
-        if x0.shape != (disc.size,):
-            raise ValueError(f"state has shape {x0.shape}; this discretisation needs "
-                             f"({disc.size},)")
-        (x, conv, res, it, status), rep = jax.device_get(_continued(scene, disc, x0))
+    given = state is not None
+    x0 = jnp.asarray(state if given else np.zeros(disc.size), jnp.float64)
+    if x0.shape != (disc.size,):
+        raise ValueError(f"state has shape {x0.shape}; this discretisation needs "
+                         f"({disc.size},)")
+    run, (_, angle, energy), X, (conv, res, it, ramp_code, tangent) = jax.device_get(
+        path_program(scene_path(scene, ("load_scale",)), disc, 1.0, 1.0, x0, given, STAY,
+                     CAPACITY))
+    status = int(ramp_code) if bool(conv) else int(Status.NOT_CONVERGED)
     code = check(status, throw, "equilibrium")
-    angle, X, tangent, energy, eig = rep
-    return Equilibrium(state=np.asarray(x), tip_angle_deg=math.degrees(float(angle)),
-                       tip_position=np.asarray(X), tip_tangent_deg=math.degrees(float(tangent)),
-                       energy=float(energy),
-                       smallest_eigenvalue=float(eig), stable=bool(eig > 0),
+    eig = float(run.min_eig[0])
+    return Equilibrium(state=np.asarray(run.x[0]), tip_angle_deg=math.degrees(float(angle[0])),
+                       tip_position=np.asarray(X[0]),
+                       tip_tangent_deg=math.degrees(float(tangent)), energy=float(energy[0]),
+                       smallest_eigenvalue=eig, stable=eig > 0,
                        converged=bool(conv) and code.ok, residual_norm=float(res),
-                       iterations=int(it),
-                       status=code)
+                       iterations=int(it), status=code)

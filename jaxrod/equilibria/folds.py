@@ -22,17 +22,17 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.tail import tail_estimate
-from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, mean_functional, tip
-from jaxrod.equilibria.record import Branch, SpecialPoint, checked
-from jaxrod.equilibria.trace import (
+from jaxrod.equilibria.equilibrium import (
+    DEFAULT_N,
     MODEL,
     NO_REST,
-    branch_options,
-    check_range,
-    path_of,
-    run_from_rest,
-    trace,
+    discretise,
+    mean_functional,
+    path_program,
+    tip,
 )
+from jaxrod.equilibria.record import Branch, SpecialPoint, checked
+from jaxrod.equilibria.trace import branch_options, check_range, path_of, trace
 from jaxrod.programs import jit, padded
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, along
@@ -185,33 +185,15 @@ def folds(scene: Scene | FileScene, vary: str, start: float, stop: float, n: int
     return checked(found, "fold", throw)
 
 
-#: Points of the run that looks for the first folds (``fold_guesses``).
-GUESS_CAPACITY = 256
-
-
-def _guess_program(path, disc, origin, span, count, opts):
-    run, _ = run_from_rest(path, disc, origin, span, opts._replace(max_folds=count),
-                           GUESS_CAPACITY, spectrum=False)
-    t = run.tangent_lam
-    change = t[:-1] * t[1:] < 0.0
-    i = jnp.nonzero(change, size=GUESS_CAPACITY - 1, fill_value=0)[0]
-    j = jnp.where(jnp.abs(t[i]) <= jnp.abs(t[i + 1]), i, i + 1)
-    z = jnp.concatenate([run.x[j], run.tangent_x[j], run.lam[j][:, None]], axis=1)
-    status = jnp.where(run.residual_norm[0] <= opts.tol, run.status, int(Status.NOT_CONVERGED))
-    return z, jnp.sum(change), status
-
-
-_guesses = jit(_guess_program)
-
-
 def fold_guesses(scene: Scene | FileScene, vary: str, start: float, stop: float, count: int,
                  n: int = DEFAULT_N) -> tuple[np.ndarray, Status]:
     """Approximate first ``count`` folds met along ``vary`` from ``start`` to ``stop``, as
     the rows z = (state, null-vector guess, lam) that a Moore-Spence solve starts from
     (lam = (v - start) / (stop - start)): the branch from the ramped equilibrium at
-    ``start``, continued without its spectrum until ``count`` folds are passed; at the
-    recorded point nearest each the state part of the branch's tangent is the guess of the
-    Hessian's kernel. Returns the rows and why the run ended (``NOT_CONVERGED`` where the
+    ``start``, continued until ``count`` folds are passed; at the recorded point nearest
+    each the state part of the branch's tangent is the guess of the Hessian's kernel (the
+    branch's own program, ``path_program``: nothing new to compile after a branch or the
+    folds of the scene). Returns the rows and why the run ended (``NOT_CONVERGED`` where the
     start did not converge: no rows then); fewer rows where fewer folds were met. The cheap
     start of fits and designs: ``folds`` refines and reports them.
     Unlike ``trace`` the run does not stop where a varied magnet enters the rod's reach: a
@@ -219,7 +201,14 @@ def fold_guesses(scene: Scene | FileScene, vary: str, start: float, stop: float,
     start, stop = check_range(scene, vary, start, stop)
     path, _ = path_of(scene, vary, start, stop)
     disc = discretise(path.template, n)
-    z, found, status = jax.device_get(_guesses(path, disc, start, stop - start,
-                                               float(count), branch_options(0)))
-    status = Status(int(status))
-    return (z[:min(int(found), count)] if status.ok else z[:0]), status
+    opts = branch_options()
+    run, *_ = jax.device_get(path_program(
+        path, disc, start, stop - start, np.zeros(disc.size), False,
+        opts._replace(max_points=0, max_folds=float(count)), opts.max_points))
+    t = run.tangent_lam[:int(run.num_points)]
+    i = np.nonzero(t[:-1] * t[1:] < 0.0)[0][:count]
+    j = np.where(np.abs(t[i]) <= np.abs(t[i + 1]), i, i + 1)
+    z = np.concatenate([run.x[j], run.tangent_x[j], run.lam[j][:, None]], axis=1)
+    status = Status(int(run.status)) if run.residual_norm[0] <= opts.tol \
+        else Status.NOT_CONVERGED
+    return (z if status.ok else z[:0]), status

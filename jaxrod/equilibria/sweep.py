@@ -23,8 +23,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise, solve_at, tip
-from jaxrod.equilibria.trace import MODEL, NO_REST, path_of
+from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, NO_REST, discretise, solve_at, tip
+from jaxrod.equilibria.trace import path_of
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.progress import Interrupted, interrupt_requested, progress_bar

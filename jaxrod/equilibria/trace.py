@@ -15,28 +15,19 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.derivatives import Structured
-from jaxrod.equilibria.equilibrium import (
-    DEFAULT_N,
-    RAMP_OPTIONS,
-    discretise,
-    loaded,
-    mean_functional,
-    solve_at,
-    tip,
-)
+from jaxrod.equilibria.equilibrium import CAPACITY, DEFAULT_N, discretise, path_program
 from jaxrod.equilibria.record import Branch, branch_from_runs, first_points
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.scenes.checks import check_scene, rebuild
 from jaxrod.scenes.files import FileScene
-from jaxrod.scenes.path import ALONG, Path, along
+from jaxrod.scenes.path import Path, along
 from jaxrod.scenes.scene import Scene
-from jaxrod.solvers.continuation import FOLDS_FOUND, ContinuationOptions, continuation_run
+from jaxrod.solvers.continuation import ContinuationOptions
 from jaxrod.status import Status
 
 
-def branch_options(max_points: int = 400) -> ContinuationOptions:
+def branch_options(max_points: int = CAPACITY) -> ContinuationOptions:
     """Steps of at most 1/20 of the range; the run ends outside [0, 1] in lam."""
     return ContinuationOptions(ds=0.01, ds_min=1e-9, ds_max=0.05, lam_min=0.0, lam_max=1.0,
                                tol=1e-12, max_points=max_points)
@@ -110,54 +101,6 @@ def _gaps(path, values, margins):
     return jax.vmap(gap)(values)
 
 
-#: The equilibria's model along a path (``jaxrod.scenes.path``): one for every key.
-MODEL = Structured(ALONG)
-NO_REST = np.zeros(0)
-
-
-def observe(path, disc, x, lam, origin, span, rest=NO_REST):
-    """(q, tip angle, energy, tip position) at a point (x, lam) of a branch (traceable)."""
-    args = (path, disc, origin, span, rest)
-    at, _ = ALONG(lam, args)
-    angle, X = tip(at, x, disc)
-    return mean_functional(disc)(x), angle, MODEL.energy(x, lam, args), X
-
-
-def run_from_rest(path, disc, origin, span, opts, capacity, rest=NO_REST, x0=None,
-                  given=False, spectrum=True):
-    """The continuation run along the path from the equilibrium at its ``origin`` (lam = 0),
-    and Newton's answer there (traceable): that equilibrium is Newton's from ``x0`` where
-    ``given``, else from the state reached by ramping the loads from zero (``RAMP_OPTIONS``;
-    where the ramp folds, the energy descended at full load: ``loaded``). The ramp is the
-    same continuation program on the path along the load scale (``Path.loading``), the two
-    runs one ``lax.scan``: the program compiles the continuation once."""
-    ramp_path = path.loading(jnp.concatenate([jnp.reshape(origin, (1,)), rest]))
-    stack = lambda *v: jnp.stack([jnp.asarray(u, jnp.float64) for u in v])
-    phases = (jax.tree_util.tree_map(stack, ramp_path, path), stack(0.0, origin),
-              stack(1.0, span), jax.tree_util.tree_map(stack, RAMP_OPTIONS, opts),
-              jnp.array([False, True]))
-    x0 = jnp.zeros(disc.size) if x0 is None else x0
-
-    def phase(x, data):
-        p, o, sp, op, main = data
-        args = (p, disc, o, sp, rest)
-        start = solve_at(MODEL, x, 0.0, args)
-        run = continuation_run(MODEL, start.x, 0.0, args, op, capacity, 1.0, spectrum)
-        ramped = loaded(MODEL, run, args, (run.status == FOLDS_FOUND) & ~main)
-        return jnp.where(given, x0, ramped), (run, start)
-
-    _, (runs, starts) = jax.lax.scan(phase, jnp.zeros(disc.size), phases)
-    return jax.tree_util.tree_map(lambda v: v[1], (runs, starts))
-
-
-def _branch_program(path, disc, origin, span, x0, given, opts, capacity):
-    run, _ = run_from_rest(path, disc, origin, span, opts, capacity, x0=x0, given=given)
-    q, angle, energy, X = jax.vmap(
-        lambda x, lam: observe(path, disc, x, lam, origin, span))(run.x, run.lam)
-    return run, (q, angle, energy), X
-
-
-_program = jit(_branch_program, static_argnames=("capacity",))
 
 
 def trace(scene: Scene | FileScene, vary: str, start: float, stop: float,
@@ -184,7 +127,7 @@ def trace(scene: Scene | FileScene, vary: str, start: float, stop: float,
     opts = options or branch_options()
     given = state is not None
     x0 = jnp.asarray(state if given else np.zeros(disc.size), jnp.float64)
-    run, observed, X = jax.device_get(_program(
+    run, observed, X, _ = jax.device_get(path_program(
         path, disc, start, end - start, x0, given, opts._replace(max_points=0),
         opts.max_points))
     # lam -> the input's value, and the tangent's lam component in the input's units

@@ -40,9 +40,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise
+from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise
 from jaxrod.equilibria.folds import fold_guesses
-from jaxrod.equilibria.trace import MODEL, check_range
+from jaxrod.equilibria.trace import check_range
 from jaxrod.inverse.fit_record import OFFSET, Prior, SceneFit, record
 from jaxrod.params import ParameterError, check_value
 from jaxrod.programs import jit
