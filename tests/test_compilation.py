@@ -110,18 +110,22 @@ def test_out_of_plane_rows_of_another_count_compile_nothing():
 def test_a_second_key_of_the_same_scene_compiles_nothing():
     """One program per scene structure and N (the varied key is a traced path through the
     scene's inputs, ``jaxrod.scenes.path``): after the folds along one key, the folds along
-    two others (one fold and none: other counts than the first's two) compile nothing."""
+    two others (one fold and none: other counts than the first's two), the equilibrium and
+    a fit's start (the fold guesses) compile nothing."""
     import math
 
     import jaxrod as jr
-    from jaxrod.equilibria.folds import folds
+    from jaxrod.equilibria.folds import fold_guesses, folds
 
     scene = jr.DipoleMagnet(2.2, 0.0236, 1.2228, 0.0).scene
     assert len(folds(scene, "magnet.alpha", 0.0, 0.5 * math.pi, n=12)) == 2
     with compilations() as c:
         other = folds(scene, "magnet.M", 0.0236, 0.06, n=12, throw=False)
         none = folds(scene, "gravity.G", 2.2, 2.0, n=12)
+        eq = jr.equilibrium(scene, n=12)
+        guesses, _ = fold_guesses(scene, "magnet.alpha", 0.0, 0.5 * math.pi, 2, n=12)
     assert none == [] and len(other) != 2
+    assert eq.converged and len(guesses) == 2
     assert c[0] == 0
 
 

@@ -227,6 +227,8 @@ class Scene:
         magnets = {name: t for name, t in self.terms.items() if hasattr(t, "centre")}
         if not magnets:
             return {}
+        # float64 leaves: Python floats (weak types) would compile a second program
+        magnets = jax.tree_util.tree_map(lambda v: np.asarray(v, np.float64), magnets)
         return {name: float(d) for name, d in _centre_norms(magnets).items()}
 
     def check_key(self, key: str) -> str:
