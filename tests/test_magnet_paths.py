@@ -85,6 +85,12 @@ def test_an_equilibrium_whose_ramp_stopped_short_is_not_converged(monkeypatch):
     scene = jr.Scene({"bending": jr.Bending(), "field": Zeeman(5.0, 1.0)})
     eq = jr.equilibrium(scene, n=7, throw=False)  # a degree no other test traces
     assert eq.status == Status.NOT_CONVERGED and eq.converged is False
+    # a branch from that ramp says so beside its own end (the same program)
+    from jaxrod.equilibria.trace import branch_options, trace
+
+    key = scene.inputs()[0]
+    b = trace(scene, key, 5.0, 6.0, n=7, options=branch_options(3))
+    assert Status.NOT_CONVERGED in b.status and not b.complete
 
 
 def test_a_range_the_branch_cannot_cover_says_so():

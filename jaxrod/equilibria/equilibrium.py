@@ -159,6 +159,17 @@ def run_from_rest(path, disc, origin, span, opts, capacity, rest=NO_REST, x0=Non
     return run, start, code
 
 
+def given_state(state, disc) -> tuple[jax.Array, bool]:
+    """(x0, given): a state given to start from, checked against the discretisation, or
+    zeros (the ramp starts from the straight rod) and False."""
+    given = state is not None
+    x0 = jnp.asarray(state if given else np.zeros(disc.size), jnp.float64)
+    if x0.shape != (disc.size,):
+        raise ValueError(f"state has shape {x0.shape}; this discretisation needs "
+                         f"({disc.size},)")
+    return x0, given
+
+
 def _path_program(path, disc, origin, span, x0, given, opts, capacity):
     """The run along the path from the equilibrium at its origin (``run_from_rest``), its
     points observed (q, tip angle, energy; tip position), and at the origin: Newton's
@@ -239,11 +250,7 @@ def equilibrium(scene: Scene | FileScene, n: int = DEFAULT_N, state=None,
         scene, margins = scene.scene, scene.margins
     check_scene(scene, margins)
     disc = discretise(scene, n)
-    given = state is not None
-    x0 = jnp.asarray(state if given else np.zeros(disc.size), jnp.float64)
-    if x0.shape != (disc.size,):
-        raise ValueError(f"state has shape {x0.shape}; this discretisation needs "
-                         f"({disc.size},)")
+    x0, given = given_state(state, disc)
     run, (_, angle, energy), X, (conv, res, it, ramp_code, tangent) = jax.device_get(
         path_program(scene_path(scene, ("load_scale",)), disc, 1.0, 1.0, x0, given, STAY,
                      CAPACITY))

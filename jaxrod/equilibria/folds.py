@@ -194,21 +194,22 @@ def fold_guesses(scene: Scene | FileScene, vary: str, start: float, stop: float,
     each the state part of the branch's tangent is the guess of the Hessian's kernel (the
     branch's own program, ``path_program``: nothing new to compile after a branch or the
     folds of the scene). Returns the rows and why the run ended (``NOT_CONVERGED`` where the
-    start did not converge: no rows then); fewer rows where fewer folds were met. The cheap
-    start of fits and designs: ``folds`` refines and reports them.
+    start or the loads' ramp to it did not converge: no rows then); fewer rows where fewer
+    folds were met. The cheap start of fits and designs: ``folds`` refines and reports them.
     Unlike ``trace`` the run does not stop where a varied magnet enters the rod's reach: a
     fit rejects a fold there (its clearance check), and says so."""
     start, stop = check_range(scene, vary, start, stop)
     path, _ = path_of(scene, vary, start, stop)
     disc = discretise(path.template, n)
     opts = branch_options()
-    run, *_ = jax.device_get(path_program(
+    run, _, _, at_start = jax.device_get(path_program(
         path, disc, start, stop - start, np.zeros(disc.size), False,
         opts._replace(max_points=0, max_folds=float(count)), opts.max_points))
     t = run.tangent_lam[:int(run.num_points)]
     i = np.nonzero(t[:-1] * t[1:] < 0.0)[0][:count]
     j = np.where(np.abs(t[i]) <= np.abs(t[i + 1]), i, i + 1)
     z = np.concatenate([run.x[j], run.tangent_x[j], run.lam[j][:, None]], axis=1)
-    status = Status(int(run.status)) if run.residual_norm[0] <= opts.tol \
+    ramp = Status(int(at_start[3]))
+    status = Status(int(run.status)) if run.residual_norm[0] <= opts.tol and ramp.ok \
         else Status.NOT_CONVERGED
     return (z if status.ok else z[:0]), status

@@ -23,7 +23,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, NO_REST, discretise, solve_at, tip
+from jaxrod.equilibria.equilibrium import (
+    DEFAULT_N,
+    MODEL,
+    NO_REST,
+    discretise,
+    given_state,
+    solve_at,
+    tip,
+)
 from jaxrod.equilibria.trace import path_of
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
@@ -78,11 +86,8 @@ def _start(scene: Scene, disc, state) -> tuple[jax.Array, bool]:
     """(the state at the first value, whether every step to it converged): ``state`` as
     given (the sweep's first step continues it by Newton), or the loads ramped from zero
     through ``_chunk`` along ``load_scale`` (module docstring)."""
-    if state is not None:
-        x0 = jnp.asarray(state, jnp.float64)
-        if x0.shape != (disc.size,):
-            raise ValueError(f"state has shape {x0.shape}; this discretisation needs "
-                             f"({disc.size},)")
+    x0, given = given_state(state, disc)
+    if given:
         return x0, True
     loads = along(scene, ("load_scale",))
     x, _, _, ok, _ = _chunk(jnp.zeros(disc.size), np.linspace(0.0, 1.0, CHUNK), loads, disc)

@@ -15,7 +15,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.equilibria.equilibrium import CAPACITY, DEFAULT_N, discretise, path_program
+from jaxrod.equilibria.equilibrium import (
+    CAPACITY,
+    DEFAULT_N,
+    discretise,
+    given_state,
+    path_program,
+)
 from jaxrod.equilibria.record import Branch, branch_from_runs, first_points
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
@@ -125,9 +131,8 @@ def trace(scene: Scene | FileScene, vary: str, start: float, stop: float,
     end = stop if entry is None else entry
     disc = discretise(path.template, n)
     opts = options or branch_options()
-    given = state is not None
-    x0 = jnp.asarray(state if given else np.zeros(disc.size), jnp.float64)
-    run, observed, X, _ = jax.device_get(path_program(
+    x0, given = given_state(state, disc)
+    run, observed, X, at_start = jax.device_get(path_program(
         path, disc, start, end - start, x0, given, opts._replace(max_points=0),
         opts.max_points))
     # lam -> the input's value, and the tangent's lam component in the input's units
@@ -135,6 +140,9 @@ def trace(scene: Scene | FileScene, vary: str, start: float, stop: float,
                        tangent_lam=(end - start) * run.tangent_lam)
     b = branch_from_runs([(run, False, observed)])
     b = dataclasses.replace(b, vary=vary, tip_position=np.asarray(X)[:int(run.num_points)])
+    ramp = Status(int(at_start[3]))
+    if not ramp.ok:  # the loads' ramp did not reach full load: the start is not the answer
+        b = dataclasses.replace(b, status=b.status + (ramp,), complete=False)
     if entry is not None:  # the path brings a magnet into the rod: the part before it
         beyond = (b.value - entry) * math.copysign(1.0, stop - start) > 0.0
         k = len(b) - int(np.argmax(~beyond[::-1])) if not beyond.all() else 1

@@ -101,7 +101,7 @@ class Path:
         """The path of this one's structure along the load scale (its first parameter; the
         others move nothing) of the scene at the parameter values p: the loads' ramp there
         (traceable; ``Scene.load_scale`` is one of the flattened leaves)."""
-        flat = jnp.concatenate([jnp.ravel(v) for v in jax.tree_util.tree_leaves(self.at(p))])
+        flat = still_path(self.at(p)).base
         i = _entry(self.template, "load_scale")
         return Path(self.template, flat.at[i].set(0.0), jnp.zeros_like(flat).at[i].set(1.0),
                     jnp.zeros_like(self.powers).at[i, 0].set(1.0))
