@@ -120,19 +120,17 @@ def convergence(ns, n_ref) -> dict:
 def conditioning(samples: int = 8) -> list[dict]:
     """2-norm condition numbers of the two fold formulations' corrector Jacobians at points
     of the lower fold's curve approaching the cusp."""
-    from jaxrod.scenes.dipole import ALPHA_MODEL
+    from jaxrod.bistability.fold_curve import SHIFT
+    from jaxrod.equilibria.equilibrium import MODEL
     from jaxrod.solvers.fold_curve import fold_linearisation
 
     point = _point()
     up = jr.fold_curves(point, "D", 1.5)
     lower = up.curves[0]
-    disc = jr.planar_discretisation(fc.DEFAULT_N, "clamped")
-    m = disc.size
-    vary = fc.Vary("groups", 2)
-    base = jnp.asarray(point.values)
     # states along the curve: re-run to get them (the FoldCurve keeps observables only)
     w0 = fc._start(point, fc.DEFAULT_N)
-    runs, _, _, _, _ = fc._run(point, "D", 0.0 - 1e-3, 0.3, w0, [1.0, 1.0], fc.DEFAULT_N, 1.0)
+    runs, _, args = fc._run(point, "D", 0.0 - 1e-3, 0.3, w0, [1.0, 1.0], fc.DEFAULT_N, 1.0)
+    m = args[1].size
     k = len(lower.value) - 1
     W = np.concatenate([np.full(2 * m, 1.0 / m), [1.0, 1.0]])
     rows = []
@@ -140,18 +138,18 @@ def conditioning(samples: int = 8) -> list[dict]:
         w = jnp.asarray(runs.w[0][j])
         t = np.asarray(runs.tangent[0][j])
         ell = w[m:2 * m] / jnp.dot(w[m:2 * m], w[m:2 * m])
-        _, J = fold_linearisation(w, ell, ALPHA_MODEL, vary, (base, disc))
+        _, J = fold_linearisation(w, ell, MODEL, SHIFT, args)
         ms = np.vstack([np.asarray(J), W * t])
         # minimally augmented: unknowns y = (x, alpha, u); g from [H b; c^T 0][v; g] = [0; 1]
         b = c = np.asarray(w[m:2 * m]) / np.linalg.norm(np.asarray(w[m:2 * m]))
 
         def minimal(y):
-            args = vary(y[m + 1], (base, disc))
-            H = ALPHA_MODEL.hessian(y[:m], y[m], args)
+            at = SHIFT(y[m + 1], args)
+            H = MODEL.hessian(y[:m], y[m], at)
             bordered = jnp.block([[H, jnp.asarray(b)[:, None]],
                                   [jnp.asarray(c)[None, :], jnp.zeros((1, 1))]])
             g = jnp.linalg.solve(bordered, jnp.zeros(m + 1).at[m].set(1.0))[m]
-            return jnp.append(ALPHA_MODEL.gradient(y[:m], y[m], args), g)
+            return jnp.append(MODEL.gradient(y[:m], y[m], at), g)
 
         y = jnp.concatenate([w[:m], w[2 * m:]])
         Jm = np.asarray(jax.jacfwd(minimal)(y))

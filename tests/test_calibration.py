@@ -20,11 +20,12 @@ from jaxrod.design_point import DesignPoint
 from jaxrod.equilibria.folds import folds as fresh_folds
 from jaxrod.inverse import scene_fit
 from jaxrod.inverse.design import design
-from jaxrod.inverse.fit import KEYS, Prior, default_point, fit, profile, rig_of
+from jaxrod.inverse.fit import Prior, default_point, fit, profile
 from jaxrod.magnet.diagram import make_scene
 from jaxrod.magnet.folds import locate_folds
 from jaxrod.params import ParameterError
 from jaxrod.plotting import profile_figure
+from jaxrod.scenes.dipole import KEYS, rig_of
 
 
 def synthetic_angles(point: DesignPoint, offset: float = 0.0) -> np.ndarray:

@@ -20,10 +20,8 @@ from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.magnet.diagram import _equilibrium
 from jaxrod.magnet.folds import locate_folds
 from jaxrod.params import ParameterError
-from jaxrod.programs import jit
 from jaxrod.scenes.dipole import DipoleMagnet
 from jaxrod.solvers.continuation import REACHED_BOUND
-from jaxrod.solvers.fold_curve import fold_curve_run
 
 D_EXP = 11.25 / 9.2
 CASES = {200: (2.2, 0.0236), 100: (4.4, 0.0472)}
@@ -134,20 +132,16 @@ def test_fold_curve_follows_round_the_cusp_back_to_the_other_fold():
     w0 = fc._start(point, fc.DEFAULT_N)
     folds = sorted(locate_folds(DipoleMagnet(*point.groups(), 0.0)).folds,
                    key=lambda f: f.alpha_deg)
-    disc = planar_discretisation(fc.DEFAULT_N, "clamped")
-    opts = fc.CURVE_OPTIONS._replace(u_min=-0.01, u_max=0.5)
-    run = jit(fold_curve_run, static_argnums=(0, 1, 5))(
-        fc.ALPHA_MODEL, fc.Vary("groups", 2), jnp.asarray(w0[0]),
-        (jnp.asarray(point.values), disc), opts, 512, 1.0)
+    runs, _, args = fc._run(point, "D", -0.01, 0.5, w0[[0]], [1.0], fc.DEFAULT_N, math.inf)
+    run = jax.tree_util.tree_map(lambda v: v[0], runs)
     k = int(run.num_points)
     assert int(run.status) == REACHED_BOUND
     u = np.asarray(run.w[:k, -1])
-    m = disc.size
+    m = args[1].size
     assert u.max() > 0.06 and u[-1] < 0  # went past the cusp (D = 1.3064) and came back
     assert np.sum(np.diff(np.sign(np.diff(u))) != 0) == 1  # one turning point in D
     j = k - 2  # the last point with u >= 0: refine to u = 0 exactly
-    end = fc._refine("value", np.asarray(run.w[j]), 0.0, disc, fc.Vary("groups", 2),
-                     jnp.asarray(point.values), "D", D_EXP, "end")
+    end = fc._refine("u", np.asarray(run.w[j]), 0.0, args, "D", D_EXP, "end")
     assert end.converged and abs(end.alpha_deg - folds[1].alpha_deg) < 1e-9
     assert abs(end.q - folds[1].q) < 1e-10
     assert np.asarray(run.w[j, 2 * m]) > np.asarray(run.w[0, 2 * m])

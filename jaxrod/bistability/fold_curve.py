@@ -1,11 +1,15 @@
 """The fold curve of any scene in two of its inputs (``vary``, ``along``), and its cusps.
 
 A fold in ``vary`` moves as a second input ``along`` changes: pseudo-arclength continuation
-of the Moore-Spence system in (x, phi, v, u) (``jaxrod.solvers.fold_curve``), both inputs on
-their scaled coordinates (v = start + span lam, u the same for ``along``), from a fold found
-on the branch. Along the curve the quadratic coefficient F_qq = D^3E[phi, phi, phi] is
-recorded; where it changes sign the curve passes a cusp (the two folds meet and the
-hysteresis closes), refined by Newton on the Moore-Spence system with F_qq = 0 added.
+of the Moore-Spence system in (x, phi, lam, u) (``jaxrod.solvers.fold_curve``) on the path
+of the scene through its inputs, with vary = origin + span lam and the other inputs
+``values + u direction`` (``Shift``): u on a scaled coordinate of ``along`` here, the relative
+change of one input of a design point in ``jaxrod.bistability.fold_curves``; one compiled
+program serves every pair of inputs of a scene. Along the curve the quadratic coefficient
+F_qq = D^3E[phi, phi, phi] is recorded; where it changes sign the curve passes a cusp (the
+two folds meet and the hysteresis closes), refined by Newton on the Moore-Spence system with
+F_qq = 0 added (``refine``: the same Newton finds where a curve reaches a given lam or u),
+with the cusp's cubic coefficient F_qqq.
 """
 
 from __future__ import annotations
@@ -25,23 +29,108 @@ from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG
 from jaxrod.scenes.path import along as along_path
 from jaxrod.scenes.scene import Scene
-from jaxrod.solvers.fold_curve import FoldCurveOptions, event_solve, fold_curve_run, split
+from jaxrod.solvers.fold_curve import (
+    FoldCurveOptions,
+    cubic_coefficient,
+    event_solve,
+    fold_curve_run,
+    parameter_lam,
+    parameter_u,
+    quadratic_coefficient,
+    split,
+)
+from jaxrod.solvers.folds import fold_coefficients
 from jaxrod.status import Status
 
 CAPACITY = 400
 
 
 @dataclasses.dataclass(frozen=True)
-class Second:
-    """``args_at`` of the fold-curve solver: the path's second parameter on its scaled
-    coordinate, with args = (path, disc, origin, span, origin2, span2)."""
+class Shift:
+    """``args_at`` of the fold-curve solver: the path's other parameters at values + u
+    direction, with args = (path, disc, origin, span, values, direction) (the fold's own
+    parameter on its scaled coordinate, ``jaxrod.scenes.path.ALONG``)."""
 
     def __call__(self, u, args):
-        path, disc, origin, span, origin2, span2 = args
-        return path, disc, origin, span, jnp.reshape(origin2 + span2 * u, (1,))
+        path, disc, origin, span, values, direction = args
+        return path, disc, origin, span, values + u * direction
 
 
-SECOND = Second()
+SHIFT = Shift()
+
+
+def _mean(disc):
+    return disc.quad_weights @ disc.to_quad
+
+
+def _tip_at(w, m, args):
+    x, _, lam, u = split(w, m)
+    return tip(ALONG(lam, SHIFT(u, args))[0], x, args[1])[0]
+
+
+def _trace_program(w0, directions, args, opts, capacity):
+    """Fold curves from the states w0 (k, 2m + 2) in the directions (k,), with what each
+    point records: (u, lam, q, tip angle, dF/dlam, F_qq, the two smallest eigenvalues of H),
+    phi scaled to q(phi) = 1."""
+    runs = jax.vmap(lambda w, d: fold_curve_run(MODEL, SHIFT, w, args, opts, capacity, d))(
+        w0, directions)
+    m = args[1].size
+    each = lambda f: jax.vmap(jax.vmap(f))
+    phi_q = each(_mean(args[1]).__matmul__)(runs.w[..., m:2 * m])
+    observed = (runs.w[..., -1], runs.w[..., 2 * m],
+                each(_mean(args[1]).__matmul__)(runs.w[..., :m]),
+                each(lambda w: _tip_at(w, m, args))(runs.w), runs.lam_derivative / phi_q,
+                runs.cubic_form / phi_q**3, runs.smallest_eigenvalues)
+    return runs, observed
+
+
+trace_program = jit(_trace_program, static_argnames=("capacity",))
+
+def _at_value(w, model, args_at, args):
+    """lam or u at w (the event of a fold curve reaching a given value of either): the
+    selector is the target's second entry (0: lam, 1: u)."""
+    return jnp.where(args[-1], parameter_u(w, model, args_at, args[:-1]),
+                     parameter_lam(w, model, args_at, args[:-1]))
+
+
+class _Selected:
+    """``args_at`` that drops the event's selector from args before ``Shift``."""
+
+    def __call__(self, u, args):
+        return SHIFT(u, args[:-1])
+
+
+SELECTED = _Selected()
+
+
+def _event_program(w0, args, target, at_u, cusp):
+    """Newton on the fold system with the event ``kind`` at ``target``, and at the point:
+    (u, lam, q, tip, dF/dlam, F_qq, two smallest eigenvalues) and F_qqq (a cusp only: the
+    coefficient of the cusp's normal form; NaN at any other point)."""
+    if cusp:
+        res = event_solve(MODEL, SHIFT, w0, args, quadratic_coefficient, target, tol=1e-13)
+    else:
+        res = event_solve(MODEL, SELECTED, w0, args + (at_u,), _at_value, target, tol=1e-13)
+    disc = args[1]
+    m = disc.size
+    x, phi, lam, u = split(res.x, m)
+    a = SHIFT(u, args)
+    d_lam, d_qq, _ = fold_coefficients(MODEL, x, lam, phi, a, _mean(disc).__matmul__)
+    eigs = jnp.linalg.eigvalsh(MODEL.hessian(x, lam, a))[:2]
+    report = (u, lam, _mean(disc) @ x, _tip_at(res.x, m, args), d_lam, d_qq, eigs)
+    cubic = cubic_coefficient(res.x, _mean(disc), MODEL, SHIFT, args) if cusp else jnp.nan
+    return res, report, cubic
+
+
+#: One program for the cusp, one for a given lam or u (which of them a traced flag).
+refine_program = jit(_event_program, static_argnames=("cusp",))
+
+
+def refine(kind: str, w, args, target: float = 0.0):
+    """(Newton's report, the point's observations, F_qqq) of the fold-curve point near w
+    where ``kind`` ("cusp", "lam" or "u") reaches ``target`` (host arrays)."""
+    return jax.device_get(refine_program(jnp.asarray(w), args, target, kind == "u",
+                                         kind == "cusp"))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -105,30 +194,6 @@ class FoldCurve:
         return ax
 
 
-def _tip_at(w, m, args):
-    x, _, lam, u = split(w, m)
-    return tip(ALONG(lam, SECOND(u, args))[0], x, args[1])[0]
-
-
-def _curve_program(w0, directions, path, disc, origin, span, origin2, span2, opts, capacity):
-    args = (path, disc, origin, span, origin2, span2)
-    runs = jax.vmap(lambda d: fold_curve_run(MODEL, SECOND, w0, args, opts, capacity, d))(
-        directions)
-    return runs, jax.vmap(jax.vmap(lambda w: _tip_at(w, disc.size, args)))(runs.w)
-
-
-_program = jit(_curve_program, static_argnames=("capacity",))
-
-
-def _cusp_program(w0, path, disc, origin, span, origin2, span2):
-    args = (path, disc, origin, span, origin2, span2)
-    res = event_solve(MODEL, SECOND, w0, args)
-    return res, _tip_at(res.x, disc.size, args)
-
-
-_cusps = jit(jax.vmap(_cusp_program, in_axes=(0, None, None, None, None, None, None)))
-
-
 def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float], along: str,
                along_range: tuple[float, float], which: int = 0, n: int = DEFAULT_N,
                ds_max: float = 0.02) -> FoldCurve:
@@ -157,45 +222,36 @@ def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, flo
     lo, hi = min(start, stop), max(start, stop)
     origin, span = lo, hi - lo
     origin2, span2 = min(a0, a1), abs(a1 - a0)
+    args = (path, disc, origin, span, jnp.array([origin2]), jnp.array([span2]))
     w0 = jnp.concatenate([jnp.asarray(f.state), jnp.asarray(f.null_vector),
                           jnp.array([(f.value - origin) / span, (u_now - origin2) / span2])])
     opts = FoldCurveOptions(ds=0.01, ds_max=ds_max, u_min=0.0, u_max=1.0, lam_min=0.0,
                             lam_max=1.0)
-    runs, angle = jax.device_get(_program(w0, jnp.array([-1.0, 1.0]), path, disc, origin,
-                                          span, origin2, span2, opts, CAPACITY))
-    m = disc.size
+    runs, observed = jax.device_get(trace_program(jnp.stack([w0, w0]), jnp.array([-1.0, 1.0]),
+                                                  args, opts, CAPACITY))
     parts, status = [], []
     for i, rev in ((0, True), (1, False)):
         k = int(runs.num_points[i])
-        w = runs.w[i, :k]
-        cols = [origin2 + span2 * w[:, 2 * m + 1], origin + span * w[:, 2 * m],
-                np.degrees(angle[i, :k]), runs.cusp_test[i, :k], w]
+        cols = [origin2 + span2 * observed[0][i, :k], origin + span * observed[1][i, :k],
+                np.degrees(observed[3][i, :k]), runs.cusp_test[i, :k], runs.w[i, :k]]
         cols = [c[::-1] if rev else c for c in cols]
         parts.append([c[:-1] if rev else c for c in cols])  # the start point once
         status.append(Status(int(runs.status[i])))
     cat = [np.concatenate([p[j] for p in parts]) for j in range(5)]
     curve = FoldCurve(vary=vary, along=along, along_values=cat[0], values=cat[1],
                       tip_angle_deg=cat[2], cusp_test=cat[3], status=tuple(status), start=f)
-    idx = curve.cusp_indices
-    if len(idx) == 0:
-        return curve
-    # each cusp refined from the bracket's point with the smaller |F_qq|
-    test = curve.cusp_test
-    pick = np.where(np.abs(test[idx]) <= np.abs(test[idx + 1]), idx, idx + 1)
-    res, angles = jax.device_get(_cusps(jnp.asarray(cat[4][pick]), path, disc, origin, span,
-                                        origin2, span2))
     cusps = []
-    for i, j in enumerate(idx):
-        x, _, lam, u = split(res.x[i], m)
+    for j in curve.cusp_indices:  # each from the bracket's point with the smaller |F_qq|
+        pick = j if abs(curve.cusp_test[j]) <= abs(curve.cusp_test[j + 1]) else j + 1
+        res, (u, lam, _, angle, *_), _ = refine("cusp", cat[4][pick], args)
         a_value, value = origin2 + span2 * float(u), origin + span * float(lam)
         # converged, and in its bracket (widened by the bracket's width on each side)
         a_lo, a_hi = sorted((float(curve.along_values[j]), float(curve.along_values[j + 1])))
         width = max(a_hi - a_lo, 1e-12 * span2)
-        conv = bool(res.converged[i]) and a_lo - width <= a_value <= a_hi + width
-        cusps.append(Cusp(a_value, value, float(np.degrees(angles[i])), np.asarray(x), conv,
-                          float(res.residual_norm[i]), int(res.iterations[i]),
-                          Status.of(conv)))
+        conv = bool(res.converged) and a_lo - width <= a_value <= a_hi + width
+        cusps.append(Cusp(a_value, value, float(np.degrees(angle)), np.asarray(res.x)[:disc.size],
+                          conv, float(res.residual_norm), int(res.iterations), Status.of(conv)))
     return dataclasses.replace(curve, cusps=tuple(cusps))
 
 
-__all__ = ["Cusp", "FoldCurve", "fold_curve"]
+__all__ = ["Cusp", "FoldCurve", "Shift", "fold_curve", "refine", "trace_program"]

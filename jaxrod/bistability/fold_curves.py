@@ -6,10 +6,11 @@ A design point is either the groups (G, M, D) or the physical inputs
 
     (E, rho, g, wire diameter, L, M_rod, M_magnet, magnet diameter, track radius),
 
-mapped to the groups by ``jaxrod.params`` (G = 4 rho g L^3 / (E b^2), M = 4 mu0 M_rod
-M_magnet a^3 / (3 E b^2 L), D = R_track / L) inside the traced program, so any one of them
+and runs as a path through the shipped rig (or the paper's scene of the groups) in the
+magnet angle and all of its inputs (``jaxrod.scenes.dipole.rig_of``), so any one of them
 can be the second parameter. It varies as v = v0 (1 + u): the continuation variable u is the
-relative change, which puts every input on the same scale.
+relative change, which puts every input on the same scale. The curves are those of the
+generic engine (``jaxrod.bistability.fold_curve``: one program for every input).
 
 ``fold_curves`` starts at the two folds of the given point (the batched fold-pair path,
 ``locate_folds`` where it does not converge), follows each by pseudo-arclength on the
@@ -31,86 +32,43 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.design_point import DesignPoint, check_target, groups_of, valid_range
-from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
+from jaxrod.bistability.fold_curve import SHIFT, refine, trace_program
+from jaxrod.design_point import DesignPoint, check_target, valid_range
+from jaxrod.discretise.planar import planar_discretisation
+from jaxrod.equilibria.equilibrium import MODEL, discretise
 from jaxrod.magnet.batch import fold_pair_states
 from jaxrod.magnet.diagram import DEFAULT_N
 from jaxrod.magnet.folds import locate_folds
-from jaxrod.magnet.reduction import mean_functional
-from jaxrod.params import (
-    ParameterError,
-)
-from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
-from jaxrod.solvers.fold_curve import (
-    FoldCurveOptions,
-    cubic_coefficient,
-    differentiable_cusp,
-    event_solve,
-    fold_curve_run,
-    parameter_lam,
-    parameter_u,
-    quadratic_coefficient,
-    split,
-)
-from jaxrod.solvers.folds import fold_coefficients
+from jaxrod.params import ParameterError
+from jaxrod.scenes.dipole import DipoleMagnet, rig_of
+from jaxrod.scenes.path import along
+from jaxrod.solvers.fold_curve import FoldCurveOptions, differentiable_cusp
 from jaxrod.status import Status
 from jaxrod.stored import StoredProgram
 
 
-@jax.tree_util.register_static
 @dataclasses.dataclass(frozen=True)
-class Vary:
-    """Puts u into the scene: the input ``index`` of a ``kind`` point becomes v0 (1 + u)."""
+class _Rig:
+    """The design point as a path through its rig: p = (magnet angle, the point's inputs in
+    the rig's units); ``args(i)`` varies input i as v0 (1 + u) with lam the angle in
+    radians (``jaxrod.bistability.fold_curve.Shift``)."""
 
-    kind: str
-    index: int
+    path: object
+    disc: object
+    span: float
+    values: np.ndarray
 
-    def __call__(self, u, args):
-        values, disc = args
-        values = values.at[self.index].multiply(1.0 + u)
-        G, M, D = groups_of(self.kind, values)
-        return DipoleMagnet(G, M, D, 0.0), disc
+    @classmethod
+    def of(cls, point: DesignPoint, n: int) -> _Rig:
+        scene, angle, _, degrees, keys = rig_of(point)
+        path = along(scene, (angle,) + tuple(keys[name][0] for name in point.names))
+        values = np.array([v / keys[name][1] for name, v in zip(point.names, point.values)])
+        return cls(path, discretise(scene, n), 180.0 / math.pi / degrees, values)
 
-
-def _observables(w, scene_at, base, disc: PlanarDiscretisation):
-    """(u, alpha, q, tip, dF/dalpha, d2F/dq2, two smallest eigenvalues) at one point."""
-    m = disc.size
-    x, phi, alpha, u = split(w, m)
-    args = scene_at(u, (base, disc))
-    d_alpha, d_qq, _ = fold_coefficients(ALPHA_MODEL, x, alpha, phi, args, disc.mean)
-    eigs = jnp.linalg.eigvalsh(ALPHA_MODEL.hessian(x, alpha, args))[:2]
-    return u, alpha, disc.mean(x), tip_angle(x, disc), d_alpha, d_qq, eigs
-
-
-def _curves_program(w0, directions, base, disc, opts, capacity, vary):
-    run = lambda w, d: fold_curve_run(ALPHA_MODEL, vary, w, (base, disc), opts, capacity, d)
-    runs = jax.vmap(run)(w0, directions)
-    m = disc.size
-    # the fold's data from what the run recorded, with phi scaled to int phi = 1
-    phi_mean = jax.vmap(jax.vmap(disc.mean))(runs.w[..., m:2 * m])
-    x = runs.w[..., :m]
-    observed = (runs.w[..., -1], runs.w[..., 2 * m], jax.vmap(jax.vmap(disc.mean))(x),
-                jax.vmap(jax.vmap(lambda th: tip_angle(th, disc)))(x),
-                runs.lam_derivative / phi_mean, runs.cubic_form / phi_mean**3,
-                runs.smallest_eigenvalues)
-    return runs, observed
-
-
-_curves = StoredProgram("fold-curves", _curves_program, static_argnames=("capacity", "vary"))
-
-
-#: The scalar events a fold-curve point is refined to: the cusp (F_qq = 0), or a given alpha.
-EVENTS = {"cusp": quadratic_coefficient, "alpha": parameter_lam, "value": parameter_u}
-
-
-def _event_program(w0, base, disc, target, vary, kind):
-    res = event_solve(ALPHA_MODEL, vary, w0, (base, disc), EVENTS[kind], target, tol=1e-13)
-    report = _observables(res.x, vary, base, disc)
-    cubic = cubic_coefficient(res.x, mean_functional(disc), ALPHA_MODEL, vary, (base, disc))
-    return res, report, cubic
-
-
-_event = StoredProgram("fold-curve-event", _event_program, static_argnames=("vary", "kind"))
+    def args(self, i: int, values=None):
+        values = jnp.asarray(self.values if values is None else values, jnp.float64)
+        return (self.path, self.disc, 0.0, self.span, values,
+                values * (jnp.arange(values.size) == i))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,7 +83,7 @@ class CurvePoint:
     tip_deg: float
     dF_dalpha: float
     d2F_dq2: float
-    cubic_coefficient: float
+    cubic_coefficient: float  # F_qqq of the cusp's normal form (NaN at any other point)
     hessian_smallest: tuple[float, float]
     converged: bool
     residual_norm: float
@@ -137,7 +95,8 @@ class CurvePoint:
         return {self.vary: self.value, "fold": self.fold, "alpha_deg": self.alpha_deg,
                 "q": self.q,
                 "tip_deg": self.tip_deg, "dF_dalpha": self.dF_dalpha, "d2F_dq2": self.d2F_dq2,
-                "cubic_coefficient": self.cubic_coefficient,
+                "cubic_coefficient": (self.cubic_coefficient
+                                      if math.isfinite(self.cubic_coefficient) else None),
                 "hessian_smallest_eigenvalues": list(self.hessian_smallest),
                 "converged": self.converged, "residual_norm": self.residual_norm,
                 "iterations": self.iterations}
@@ -240,17 +199,16 @@ def _start(point: DesignPoint, n: int) -> np.ndarray:
 
 
 def _run(point, name, u_lo, u_hi, w0, directions, n, max_cusps):
-    disc = planar_discretisation(n, "clamped")
-    vary = Vary(point.kind, point.index(name))
-    base = jnp.asarray(point.values, jnp.float64)
+    """The fold curves from the states w0 in the directions, and the engine's args."""
+    args = _Rig.of(point, n).args(point.index(name))
     opts = CURVE_OPTIONS._replace(u_min=u_lo, u_max=u_hi, max_cusps=max_cusps)
-    runs, observed = jax.device_get(_curves(jnp.asarray(w0), jnp.asarray(directions), base,
-                                            disc, opts, CURVE_CAPACITY, vary))
-    return runs, observed, disc, vary, base
+    runs, observed = jax.device_get(trace_program(jnp.asarray(w0), jnp.asarray(directions),
+                                                  args, opts, CURVE_CAPACITY))
+    return runs, observed, args
 
 
-def _refine(kind, w, target, disc, vary, base, name, v0, label) -> CurvePoint:
-    res, rep, cubic = jax.device_get(_event(jnp.asarray(w), base, disc, target, vary, kind))
+def _refine(kind, w, target, args, name, v0, label) -> CurvePoint:
+    res, rep, cubic = refine(kind, w, args, target)
     u, alpha, q, tip, d_alpha, d_qq, eigs = rep
     return CurvePoint(kind=label, vary=name, value=float(v0 * (1.0 + u)),
                       alpha_deg=math.degrees(float(alpha)), q=float(q),
@@ -303,21 +261,21 @@ def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) ->
     direction = math.copysign(1.0, u_to)
     # a curve that passes the cusp comes back as the other fold: stop it just past the start
     margin = 1e-3 * abs(u_to)
-    runs, observed, disc, vary_map, base = _run(point, vary, lo - margin, hi + margin, w0,
+    runs, observed, args = _run(point, vary, lo - margin, hi + margin, w0,
                                                 [direction, direction], n, 1.0)
     curves, cusp, events = [], None, []
     for i_run, start in enumerate(("lower", "upper")):
         curve, near = _curve_from(runs, observed, i_run, start, v0)
         if near is not None and cusp is None:
-            cusp = _refine("cusp", runs.w[i_run][near], 0.0, disc, vary_map, base, vary, v0,
+            cusp = _refine("cusp", runs.w[i_run][near], 0.0, args, vary, v0,
                            "cusp")
         events += [dataclasses.replace(e, fold=start) for e in _alpha_events(
-            runs, observed, i_run, disc, vary_map, base, vary, v0, len(curve.value))]
+            runs, observed, i_run, args, vary, v0, len(curve.value))]
         if curve.reaches_cusp:
             curve = _with_end(curve, cusp)
         elif abs(curve.value[-1] - v0) > abs(to - v0):  # passed `to`: end exactly there
             k = len(curve.value) - 1
-            end = _refine("value", runs.w[i_run][k], u_to, disc, vary_map, base, vary, v0,
+            end = _refine("u", runs.w[i_run][k], u_to, args, vary, v0,
                           "end")
             curve = _with_end(dataclasses.replace(curve, **{
                 f.name: getattr(curve, f.name)[:-1] for f in dataclasses.fields(curve)
@@ -339,14 +297,13 @@ def _with_end(curve: FoldCurve, end: CurvePoint) -> FoldCurve:
         residual_norm=add(curve.residual_norm, end.residual_norm))
 
 
-def _alpha_events(runs, observed, i, disc, vary_map, base, vary, v0, k) -> list[CurvePoint]:
+def _alpha_events(runs, observed, i, args, vary, v0, k) -> list[CurvePoint]:
     alpha = np.asarray(observed[1][i][:k])
     events = []
     for target, label in ((math.pi / 2, "alpha = 90 deg"), (0.0, "alpha = 0 deg")):
         for j in _sign_changes(alpha - target):
             near = j if abs(alpha[j] - target) < abs(alpha[j + 1] - target) else j + 1
-            events.append(_refine("alpha", runs.w[i][near], target, disc, vary_map, base,
-                                  vary, v0, label))
+            events.append(_refine("lam", runs.w[i][near], target, args, vary, v0, label))
     return events
 
 
@@ -364,7 +321,7 @@ def trace_fold_curve(point: DesignPoint, vary: str, between: tuple[float, float]
     if not lo < v0 < hi:
         raise ParameterError(f"between: {vary} = {v0!r} must lie inside ({lo!r}, {hi!r})")
     w0 = _start(point, n)
-    runs, observed, disc, vary_map, base = _run(
+    runs, observed, args = _run(
         point, vary, lo / v0 - 1.0, hi / v0 - 1.0, w0[[0 if start == "lower" else 1]],
         [math.copysign(1.0, direction)], n, float(max_cusps))
     k = int(runs.num_points[0])
@@ -372,7 +329,7 @@ def trace_fold_curve(point: DesignPoint, vary: str, between: tuple[float, float]
     cusps = []
     for j in _sign_changes(test):
         near = j if abs(test[j]) < abs(test[j + 1]) else j + 1
-        cusps.append(_refine("cusp", runs.w[0][near], 0.0, disc, vary_map, base, vary, v0,
+        cusps.append(_refine("cusp", runs.w[0][near], 0.0, args, vary, v0,
                              "cusp"))
     u, alpha = np.asarray(observed[0][0][:k]), np.asarray(observed[1][0][:k])
     return v0 * (1.0 + u), np.degrees(alpha), cusps, Status(int(runs.status[0]))
@@ -399,7 +356,7 @@ def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> CurvePoint:
     u_lo = max(CUSP_SEARCH[0], (lo / v0 - 1.0) * 0.99 if lo > 0 else CUSP_SEARCH[0])
     u_hi = min(CUSP_SEARCH[1], (hi / v0 - 1.0) * 0.99 if math.isfinite(hi) else CUSP_SEARCH[1])
     w0 = _start(point, n)
-    runs, observed, disc, vary_map, base = _run(point, vary, u_lo, u_hi, w0[[0, 0]],
+    runs, observed, args = _run(point, vary, u_lo, u_hi, w0[[0, 0]],
                                                 [1.0, -1.0], n, 1.0)
     found = []
     for i_run in (0, 1):
@@ -411,7 +368,7 @@ def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> CurvePoint:
                           math.nan, math.nan, (math.nan, math.nan), False, math.nan, 0,
                           np.full(2 * planar_discretisation(n).size + 2, np.nan))
     _, i_run, near = min(found)
-    return _refine("cusp", runs.w[i_run][near], 0.0, disc, vary_map, base, vary, v0, "cusp")
+    return _refine("cusp", runs.w[i_run][near], 0.0, args, vary, v0, "cusp")
 
 
 def cusp_location(point: DesignPoint, vary: str, cusp: CurvePoint, n: int = DEFAULT_N):
@@ -425,13 +382,14 @@ def cusp_location(point: DesignPoint, vary: str, cusp: CurvePoint, n: int = DEFA
     ``find_cusp``.
     """
     i = point.index(vary)
-    disc = planar_discretisation(n, "clamped")
-    vary_map = Vary(point.kind, i)
-    m = disc.size
+    rig = _Rig.of(point, n)
+    m = rig.disc.size
     w_start = jnp.asarray(cusp.state)
+    factors = rig.values / np.asarray(point.values)
 
     def location(values):
-        w, stats = differentiable_cusp(ALPHA_MODEL, vary_map, w_start, (values, disc))
+        args = rig.args(i, jnp.asarray(values) * factors)
+        w, stats = differentiable_cusp(MODEL, SHIFT, w_start, args)
         return values[i] * (1.0 + w[2 * m + 1]), w[2 * m], stats
 
     return location

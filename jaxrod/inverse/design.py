@@ -6,7 +6,7 @@ release (a sweep of increasing magnet angle captures the rod at -alpha_lower and
 it at alpha_upper; the offset is zero). The inputs named in ``vary`` are solved for by the
 generic design (``jaxrod.inverse.scene_fit.design_folds``: the fit's least-squares program
 with the four angles as targets, on the shipped rig or the paper's scene of the groups,
-``jaxrod.inverse.fit.rig_of``) within bounds; its line search rejects every trial point
+``jaxrod.scenes.dipole.rig_of``) within bounds; its line search rejects every trial point
 where the magnet would touch the rod, an input leaves its bounds or the branch has no two
 folds (only bistable designs). It starts from the given point and from a grid of points
 inside the bounds, so that separate solutions are each found; every solution is verified
@@ -22,9 +22,10 @@ import math
 import numpy as np
 
 from jaxrod.design_point import DesignPoint, range_of
-from jaxrod.inverse.fit import MODEL_N, OFFSET, READOUT, _check_names, check_bounds, rig_of
+from jaxrod.inverse.fit import MODEL_N, OFFSET, READOUT, _check_names, check_bounds
 from jaxrod.inverse.scene_fit import design_folds, with_values
 from jaxrod.params import UNITS, ParameterError, check_degree, check_value
+from jaxrod.scenes.dipole import rig_of
 
 #: The fresh continuation at a design must agree with the model's folds to this (deg).
 VERIFY_DEG = 1e-6

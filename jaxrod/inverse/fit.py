@@ -18,7 +18,6 @@ fold model is computed at N = ``MODEL_N``.
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 
@@ -34,6 +33,7 @@ from jaxrod.params import (
     check_value,
     preset,
 )
+from jaxrod.scenes.dipole import rig_of
 
 __all__ = ["ANGLE_NAMES", "FREE_NAMES", "OFFSET", "Prior", "calibrate_rows", "default_point",
            "fit", "profile"]
@@ -43,14 +43,6 @@ ANGLE_NAMES = ("cw_capture", "cw_release", "ccw_capture", "ccw_release")
 READOUT = ((1, -1.0), (0, 1.0), (1, 1.0), (0, -1.0))
 #: The fold model's Chebyshev degree (the fold angles reach round-off by N = 12).
 MODEL_N = 12
-#: The paper's name of each input -> (the rig's key, the name's value per unit of the key).
-KEYS = {"E": ("rod.youngs_modulus", 1.0), "density": ("rod.density", 1.0),
-        "gravity": ("gravity.g", 1.0), "diameter": ("rod.radius", 2.0),
-        "length": ("rod.length", 1.0), "rod-magnetisation": ("magnetisation.saturation", 1.0),
-        "remanence": ("field.0.remanence", 1.0), "magnet-diameter": ("field.0.diameter", 1.0),
-        "track-radius": ("field.0.radius", 1.0)}
-#: The groups' keys in the paper's scene (its magnet angle in radians).
-GROUP_KEYS = {"G": ("gravity.G", 1.0), "M": ("magnet.M", 1.0), "D": ("magnet.D", 1.0)}
 #: The inputs a calibration may free: every physical input, and the track's angular offset.
 FREE_NAMES = PHYSICAL_NAMES + (OFFSET,)
 #: Default bounds of the offset, degrees.
@@ -101,23 +93,6 @@ def default_point() -> DesignPoint:
     """The paper's permanent-magnet experiment (nickel wire, NdFeB magnet), physical."""
     rod, _ = preset("permanent-magnet")
     return DesignPoint.from_physical(rod, NDFEB_MAGNET)
-
-
-def rig_of(point: DesignPoint):
-    """(scene or rig, the magnet angle's key, its range, degrees per its unit, the names'
-    keys) of a design point: the shipped rig at a physical point's values, or the paper's
-    scene of the groups."""
-    if point.kind == "groups":
-        from jaxrod.scenes.dipole import DipoleMagnet
-
-        G, M, D = point.groups()
-        return (DipoleMagnet(G, M, D, 0.0).scene, "magnet.alpha", (0.0, 0.5 * math.pi),
-                180.0 / math.pi, GROUP_KEYS)
-    from jaxrod.scenes.files import load
-
-    rig = load("permanent-magnet", [f"{KEYS[n][0]}={v / KEYS[n][1]!r}"
-                                    for n, v in zip(point.names, point.values)])
-    return rig, "field.0.angle_deg", (0.0, 90.0), 1.0, KEYS
 
 
 def _check_names(names, allowed, what: str) -> tuple[str, ...]:

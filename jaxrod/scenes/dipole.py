@@ -18,11 +18,13 @@ The demagnetising term vanishes identically (m = d3) and the support is clamped.
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import jax
 import jax.numpy as jnp
 
 from jaxrod.derivatives import Structured
+from jaxrod.design_point import DesignPoint
 from jaxrod.discretise.planar import PlanarDiscretisation
 from jaxrod.params import ParameterError
 from jaxrod.scenes.functionals import bending_energy, gravity_energy
@@ -130,3 +132,28 @@ def preset_or_scene(scene, vary, paper, generic, need: str):
                                  "number of a rig file)")
         return paper(scene)
     return generic(scene.scene if isinstance(scene, DipoleMagnet) else scene)
+
+
+#: The paper's name of each input -> (the rig's key, the name's value per unit of the key).
+KEYS = {"E": ("rod.youngs_modulus", 1.0), "density": ("rod.density", 1.0),
+        "gravity": ("gravity.g", 1.0), "diameter": ("rod.radius", 2.0),
+        "length": ("rod.length", 1.0), "rod-magnetisation": ("magnetisation.saturation", 1.0),
+        "remanence": ("field.0.remanence", 1.0), "magnet-diameter": ("field.0.diameter", 1.0),
+        "track-radius": ("field.0.radius", 1.0)}
+#: The groups' keys in the paper's scene (its magnet angle in radians).
+GROUP_KEYS = {"G": ("gravity.G", 1.0), "M": ("magnet.M", 1.0), "D": ("magnet.D", 1.0)}
+
+
+def rig_of(point: DesignPoint):
+    """(scene or rig, the magnet angle's key, its range, degrees per its unit, the names'
+    keys) of a design point: the shipped rig at a physical point's values, or the paper's
+    scene of the groups."""
+    if point.kind == "groups":
+        G, M, D = point.groups()
+        return (DipoleMagnet(G, M, D, 0.0).scene, "magnet.alpha", (0.0, 0.5 * math.pi),
+                180.0 / math.pi, GROUP_KEYS)
+    from jaxrod.scenes.files import load
+
+    rig = load("permanent-magnet", [f"{KEYS[n][0]}={v / KEYS[n][1]!r}"
+                                    for n, v in zip(point.names, point.values)])
+    return rig, "field.0.angle_deg", (0.0, 90.0), 1.0, KEYS
