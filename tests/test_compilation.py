@@ -129,6 +129,21 @@ def test_a_second_key_of_the_same_scene_compiles_nothing():
     assert c[0] == 0
 
 
+def test_fold_curves_along_a_second_input_compile_nothing():
+    """The fold curves of a design point run on the path through all of its inputs: after
+    the curves and the cusp in D, those in G and the cusp in M compile nothing."""
+    import jaxrod as jr
+
+    point = jr.DesignPoint.from_groups(2.2, 0.0236, D_EXP)
+    assert jr.fold_curves(point, "D", 1.25, n=8).converged
+    assert jr.cusp(point, "D", n=8).converged
+    with compilations() as c:
+        along_G = jr.fold_curves(point, "G", 2.6, n=8)
+        cusp_M = jr.cusp(point, "M", n=8)
+    assert along_G.converged and cusp_M.kind in ("cusp", "none")
+    assert c[0] == 0
+
+
 def test_a_new_duration_or_step_of_a_motion_compiles_nothing():
     """The integrators take the step size traced and the step count within a static budget
     (``jaxrod.programs.steps_loop``): after a motion of 40 steps, one of 37 steps of another

@@ -336,6 +336,7 @@ def test_the_generic_fold_curve_of_the_papers_scene_passes_its_cusp():
     (refined,) = curve.cusps
     assert refined.converged and abs(refined.along_value - cusp.value) <= 1e-11
     assert abs(math.degrees(refined.value) - cusp.alpha_deg) <= 1e-9
+    assert refined.cubic_coefficient == pytest.approx(cusp.cubic_coefficient, rel=1e-8)
     for j in (0, i // 2, (i + len(curve.values)) // 2):  # both folds, away from the cusp
         at = jr.folds(jr.magnet_scene(G, M, float(curve.along_values[j])), n=N).folds
         assert min(abs(f.alpha_deg - math.degrees(curve.values[j])) for f in at) <= 1e-9

@@ -138,11 +138,14 @@ class Cusp:
     """A cusp of a fold curve, refined: the fold where F_qq = D^3E[phi, phi, phi] = 0
     (``jaxrod.solvers.fold_curve.event_solve``: the Moore-Spence system with that equation
     added, in (x, phi, v, u)). ``along_value``, ``value``: the two inputs there; the state,
-    the tip angle (degrees), and Newton's report."""
+    the tip angle (degrees), the cubic coefficient F_qqq of the cusp's normal form
+    F = F_v (v - v_c) + F_qu (u - u_c) q + F_qqq q^3 / 6 (phi scaled to mean(phi) = 1), and
+    Newton's report."""
 
     along_value: float
     value: float
     tip_angle_deg: float
+    cubic_coefficient: float
     state: np.ndarray
     converged: bool
     residual_norm: float
@@ -151,7 +154,8 @@ class Cusp:
 
     def as_dict(self) -> dict:
         return {"along": self.along_value, "value": self.value,
-                "tip_angle_deg": self.tip_angle_deg, "converged": self.converged,
+                "tip_angle_deg": self.tip_angle_deg,
+                "cubic_coefficient": self.cubic_coefficient, "converged": self.converged,
                 "residual_norm": self.residual_norm, "iterations": self.iterations}
 
 
@@ -243,14 +247,15 @@ def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, flo
     cusps = []
     for j in curve.cusp_indices:  # each from the bracket's point with the smaller |F_qq|
         pick = j if abs(curve.cusp_test[j]) <= abs(curve.cusp_test[j + 1]) else j + 1
-        res, (u, lam, _, angle, *_), _ = refine("cusp", cat[4][pick], args)
+        res, (u, lam, _, angle, *_), cubic = refine("cusp", cat[4][pick], args)
         a_value, value = origin2 + span2 * float(u), origin + span * float(lam)
         # converged, and in its bracket (widened by the bracket's width on each side)
         a_lo, a_hi = sorted((float(curve.along_values[j]), float(curve.along_values[j + 1])))
         width = max(a_hi - a_lo, 1e-12 * span2)
         conv = bool(res.converged) and a_lo - width <= a_value <= a_hi + width
-        cusps.append(Cusp(a_value, value, float(np.degrees(angle)), np.asarray(res.x)[:disc.size],
-                          conv, float(res.residual_norm), int(res.iterations), Status.of(conv)))
+        cusps.append(Cusp(a_value, value, float(np.degrees(angle)), float(cubic),
+                          np.asarray(res.x)[:disc.size], conv, float(res.residual_norm),
+                          int(res.iterations), Status.of(conv)))
     return dataclasses.replace(curve, cusps=tuple(cusps))
 
 
