@@ -251,7 +251,14 @@ def test_a_new_term_runs_through_branch_folds_fold_curve_and_map():
     assert folds[0].value < bare[0].value and folds[1].value < bare[1].value
     curve = jr.fold_curve(scene, "magnet.alpha", (0.0, math.pi / 2), "spring.k", (0.0, 0.3),
                           n=N)
-    assert curve.along_values.min() <= 0.0 and curve.along_values.max() >= 0.3
+    # each end refined onto the range of k it leaves: the fold of the scene at that k
+    ends = sorted((p for p in curve.special_points if p.kind == "end"),
+                  key=lambda p: p.along_value)
+    assert [p.converged for p in ends] == [True, True]
+    assert abs(ends[0].along_value) <= 1e-12 and abs(ends[1].along_value - 0.3) <= 1e-12
+    assert curve.along_values.min() == ends[0].along_value
+    at_end = jr.folds(spring_scene(0.3), "magnet.alpha", 0.0, math.pi / 2, n=N)[0].value
+    assert abs(ends[1].value - at_end) <= 1e-10
     k = 0.2
     on_curve = np.interp(k, curve.along_values, curve.values)
     direct = jr.folds(spring_scene(k), "magnet.alpha", 0.0, math.pi / 2, n=N)[0].value

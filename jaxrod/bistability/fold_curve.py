@@ -134,14 +134,16 @@ def refine(kind: str, w, args, target: float = 0.0):
 
 
 @dataclasses.dataclass(frozen=True)
-class Cusp:
-    """A cusp of a fold curve, refined: the fold where F_qq = D^3E[phi, phi, phi] = 0
-    (``jaxrod.solvers.fold_curve.event_solve``: the Moore-Spence system with that equation
-    added, in (x, phi, v, u)). ``along_value``, ``value``: the two inputs there; the state,
-    the tip angle (degrees), the cubic coefficient F_qqq of the cusp's normal form
-    F = F_v (v - v_c) + F_qu (u - u_c) q + F_qqq q^3 / 6 (phi scaled to mean(phi) = 1), and
-    Newton's report."""
+class FoldCurvePoint:
+    """A special point of a fold curve, refined by Newton on the Moore-Spence system with
+    one equation added (``jaxrod.solvers.fold_curve.event_solve``, in (x, phi, v, u)):
+    ``kind`` "cusp" where F_qq = D^3E[phi, phi, phi] = 0, "end" where the curve leaves the
+    range of ``vary`` or of ``along``. ``along_value``, ``value``: the two inputs there; the
+    state, the tip angle (degrees), the cubic coefficient F_qqq of a cusp's normal form
+    F = F_v (v - v_c) + F_qu (u - u_c) q + F_qqq q^3 / 6 (phi scaled to mean(phi) = 1; NaN
+    at an end), and Newton's report."""
 
+    kind: str
     along_value: float
     value: float
     tip_angle_deg: float
@@ -153,16 +155,19 @@ class Cusp:
     status: Status
 
     def as_dict(self) -> dict:
-        return {"along": self.along_value, "value": self.value,
+        cubic = self.cubic_coefficient
+        return {"kind": self.kind, "along": self.along_value, "value": self.value,
                 "tip_angle_deg": self.tip_angle_deg,
-                "cubic_coefficient": self.cubic_coefficient, "converged": self.converged,
-                "residual_norm": self.residual_norm, "iterations": self.iterations}
+                "cubic_coefficient": cubic if np.isfinite(cubic) else None,
+                "converged": self.converged, "residual_norm": self.residual_norm,
+                "iterations": self.iterations}
 
 
 @dataclasses.dataclass(frozen=True)
 class FoldCurve:
     """Points of a fold curve (both directions from the starting fold, joined in order of
-    ``along``), with the cusp test F_qq / |phi|^3 at each and the cusps passed.
+    ``along``), with the cusp test F_qq / |phi|^3 at each and its special points (the cusps
+    passed, and each end refined onto the range it leaves).
 
     ``along_values``: the second input; ``values``: ``vary`` at the fold; ``tip_angle_deg``:
     the tip at the fold; ``status``: why each direction ended.
@@ -176,7 +181,11 @@ class FoldCurve:
     cusp_test: np.ndarray
     status: tuple[Status, ...]
     start: Fold
-    cusps: tuple[Cusp, ...] = ()
+    special_points: tuple[FoldCurvePoint, ...] = ()
+
+    @property
+    def cusps(self) -> tuple[FoldCurvePoint, ...]:
+        return tuple(p for p in self.special_points if p.kind == "cusp")
 
     @property
     def cusp_indices(self) -> np.ndarray:
@@ -196,6 +205,18 @@ class FoldCurve:
         ax.set_xlabel(self.along)
         ax.set_ylabel(self.vary)
         return ax
+
+
+def _special_point(kind, w, args, target, scales) -> FoldCurvePoint:
+    """The point near w where ``kind`` ("cusp", "lam", "u") reaches ``target``, in the
+    inputs' units (scales = (origin, span, origin2, span2))."""
+    res, (u, lam, _, angle, *_), cubic = refine(kind, w, args, target)
+    origin, span, origin2, span2 = scales
+    conv = bool(res.converged)
+    return FoldCurvePoint("cusp" if kind == "cusp" else "end", origin2 + span2 * float(u),
+                          origin + span * float(lam), float(np.degrees(angle)), float(cubic),
+                          np.asarray(res.x)[:args[1].size], conv, float(res.residual_norm),
+                          int(res.iterations), Status.of(conv))
 
 
 def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float], along: str,
@@ -233,11 +254,21 @@ def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, flo
                             lam_max=1.0)
     runs, observed = jax.device_get(trace_program(jnp.stack([w0, w0]), jnp.array([-1.0, 1.0]),
                                                   args, opts, CAPACITY))
-    parts, status = [], []
+    scales, m = (origin, span, origin2, span2), disc.size
+    parts, status, ends = [], [], []
     for i, rev in ((0, True), (1, False)):
         k = int(runs.num_points[i])
         cols = [origin2 + span2 * observed[0][i, :k], origin + span * observed[1][i, :k],
                 np.degrees(observed[3][i, :k]), runs.cusp_test[i, :k], runs.w[i, :k]]
+        lam, u = runs.w[i, k - 1, 2 * m], runs.w[i, k - 1, 2 * m + 1]
+        if int(runs.status[i]) == Status.REACHED_BOUND:  # its last point is just outside
+            kind = "lam" if not 0.0 <= lam <= 1.0 else "u"
+            target = float(np.clip(lam if kind == "lam" else u, 0.0, 1.0))
+            end = _special_point(kind, runs.w[i, k - 1], args, target, scales)
+            ends.append(end)
+            if end.converged:  # the curve ends on the range exactly
+                for c, v in zip(cols, (end.along_value, end.value, end.tip_angle_deg)):
+                    c[-1] = v
         cols = [c[::-1] if rev else c for c in cols]
         parts.append([c[:-1] if rev else c for c in cols])  # the start point once
         status.append(Status(int(runs.status[i])))
@@ -247,16 +278,14 @@ def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, flo
     cusps = []
     for j in curve.cusp_indices:  # each from the bracket's point with the smaller |F_qq|
         pick = j if abs(curve.cusp_test[j]) <= abs(curve.cusp_test[j + 1]) else j + 1
-        res, (u, lam, _, angle, *_), cubic = refine("cusp", cat[4][pick], args)
-        a_value, value = origin2 + span2 * float(u), origin + span * float(lam)
+        c = _special_point("cusp", cat[4][pick], args, 0.0, scales)
         # converged, and in its bracket (widened by the bracket's width on each side)
         a_lo, a_hi = sorted((float(curve.along_values[j]), float(curve.along_values[j + 1])))
         width = max(a_hi - a_lo, 1e-12 * span2)
-        conv = bool(res.converged) and a_lo - width <= a_value <= a_hi + width
-        cusps.append(Cusp(a_value, value, float(np.degrees(angle)), float(cubic),
-                          np.asarray(res.x)[:disc.size], conv, float(res.residual_norm),
-                          int(res.iterations), Status.of(conv)))
-    return dataclasses.replace(curve, cusps=tuple(cusps))
+        if not a_lo - width <= c.along_value <= a_hi + width:
+            c = dataclasses.replace(c, converged=False, status=Status.NOT_CONVERGED)
+        cusps.append(c)
+    return dataclasses.replace(curve, special_points=tuple(cusps + ends))
 
 
-__all__ = ["Cusp", "FoldCurve", "Shift", "fold_curve", "refine", "trace_program"]
+__all__ = ["FoldCurve", "FoldCurvePoint", "Shift", "fold_curve", "refine", "trace_program"]

@@ -43,15 +43,18 @@ def foldcurve_on_file(args) -> int:
     a0 = along(file, (args.along,)).start[0]
     curve = jr.fold_curve(file, key, (start, stop), args.along, (a0, args.along_to),
                           which=args.which, n=args.n)
-    cusps = [{**c.as_dict(), "along": c.along_value / a_factor, "value": c.value / factor}
-             for c in curve.cusps]
+    special = [{**c.as_dict(), "along": c.along_value / a_factor, "value": c.value / factor}
+               for c in curve.special_points]
+    cusps = [c for c in special if c["kind"] == "cusp"]
     failed = [s for s in curve.status if not s.ok]
     status = failed[0] if failed else (
-        Status.SUCCESS if all(c.converged for c in curve.cusps) else Status.NOT_CONVERGED)
+        Status.SUCCESS if all(c.converged for c in curve.special_points)
+        else Status.NOT_CONVERGED)
     out = {"vary": args.vary, "along": args.along,
            "along_values": (curve.along_values / a_factor).tolist(),
            "values": (curve.values / factor).tolist(),
            "tip_angle_deg": curve.tip_angle_deg.tolist(), "cusps": cusps,
+           "ends": [c for c in special if c["kind"] == "end"],
            "curve_status": [s.name.lower() for s in curve.status],
            "status": status.name.lower(), "converged": status == Status.SUCCESS}
     if args.out:
@@ -65,8 +68,8 @@ def foldcurve_on_file(args) -> int:
     else:
         print(f"{args.rig}: the fold in {args.vary} followed in {args.along} over "
               f"{len(curve.values)} points ({', '.join(str(s) for s in curve.status)})")
-        for c in cusps:
-            print(f"  cusp near {args.along} = {c['along']:.8g}, {args.vary} = "
+        for c in special:
+            print(f"  {c['kind']} at {args.along} = {c['along']:.8g}, {args.vary} = "
                   f"{c['value']:.8g}")
     return 0 if out["converged"] else 1
 
