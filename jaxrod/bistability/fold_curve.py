@@ -42,7 +42,7 @@ from jaxrod.solvers.fold_curve import (
 from jaxrod.solvers.folds import fold_coefficients
 from jaxrod.status import Status
 
-CAPACITY = 400
+CAPACITY = 512
 
 
 @dataclasses.dataclass(frozen=True)

@@ -32,7 +32,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.bistability.fold_curve import SHIFT, refine, trace_program
+from jaxrod.bistability.fold_curve import CAPACITY, SHIFT, refine, trace_program
 from jaxrod.design_point import DesignPoint, check_target, valid_range
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise
@@ -158,7 +158,6 @@ class FoldCurves:
 #: to [-90, 180] degrees (a fold leaving (0, 90] is reported, and followed a little further).
 CURVE_OPTIONS = FoldCurveOptions(ds=0.01, ds_min=1e-9, ds_max=0.02, lam_min=-math.pi / 2,
                                  lam_max=math.pi, tol=1e-12)
-CURVE_CAPACITY = 512
 
 
 def _start(point: DesignPoint, n: int) -> np.ndarray:
@@ -183,7 +182,7 @@ def _run(point, name, u_lo, u_hi, w0, directions, n, max_cusps):
     args = _Rig.of(point, n).args(point.index(name))
     opts = CURVE_OPTIONS._replace(u_min=u_lo, u_max=u_hi, max_cusps=max_cusps)
     runs, observed = jax.device_get(trace_program(jnp.asarray(w0), jnp.asarray(directions),
-                                                  args, opts, CURVE_CAPACITY))
+                                                  args, opts, CAPACITY))
     return runs, observed, args
 
 
