@@ -174,10 +174,12 @@ def test_bad_inputs_are_refused():
 
 @pytest.mark.parametrize("groups", [(*CASES[200], D_EXP), (*CASES[100], D_EXP),
                                     (2.887, 0.01795, 1.1915)])
-def test_fold_curves_start_at_the_folds_of_locate_folds(groups):
-    """The start of every fold curve, the generic folds of the scene of the groups, is the
-    pair of folds of the paper's diagram (locate_folds, its own scene and program): same
-    angles, same states. (2.887, 0.01795, 1.1915) is a 13-degree loop near the cusp."""
+def test_fold_curves_start_at_the_folds_of_locate_folds(groups, monkeypatch):
+    """The start of every fold curve, from the batched fold-pair path (or from the generic
+    folds of the branch where that path does not converge), is the pair of folds of the
+    paper's diagram (locate_folds): same angles, same states. (2.887, 0.01795, 1.1915) is the
+    13-degree loop the batched path once flagged as not converged; with the batched path
+    forced to fail, the fallback gives the same start."""
     point = fc.DesignPoint.from_groups(*groups)
     folds = sorted(locate_folds(DipoleMagnet(*groups, 0.0)).folds, key=lambda f: f.alpha_deg)
     assert [f.kind for f in folds] == ["lower", "upper"]
@@ -193,5 +195,9 @@ def test_fold_curves_start_at_the_folds_of_locate_folds(groups):
             assert cos > 1 - 1e-12
             assert w[-1] == 0.0
 
+    check(fc._start(point, fc.DEFAULT_N))
+    z, _ = fc._pair_start(*(jnp.asarray(v) for v in groups),
+                          planar_discretisation(fc.DEFAULT_N, "clamped"))
+    monkeypatch.setattr(fc, "_pair_start", lambda *a: (z, False))
     check(fc._start(point, fc.DEFAULT_N))
 

@@ -12,15 +12,15 @@ can be the second parameter. It varies as v = v0 (1 + u): the continuation varia
 relative change, which puts every input on the same scale. The curves are those of the
 generic engine (``jaxrod.bistability.fold_curve``: one program for every input).
 
-``fold_curves`` starts at the two folds of the given point (the generic folds of its
-branch in the magnet angle), follows each by pseudo-arclength on the
-Moore-Spence system in (theta, phi, alpha, u) (``jaxrod.solvers.fold_curve``) towards the
-requested value, and refines the cusp where d2F/dq2 changes sign along a curve (beyond it
-the curve continues as the other fold). ``find_cusp`` follows the lower fold both ways and
-returns the nearest cusp. Along a curve it records alpha*, q*, tip*, dF/dalpha, d2F/dq2
-(with phi scaled to int phi = 1) and the two smallest Hessian eigenvalues (one is zero at
-the fold; the other's sign tells the fold's stability data: a fold between a stable and an
-index-1 branch has it positive).
+``fold_curves`` starts at the two folds of the given point (the batched fold-pair path, the
+generic folds of its branch in the magnet angle where that does not converge), follows each
+by pseudo-arclength on the Moore-Spence system in (theta, phi, alpha, u)
+(``jaxrod.solvers.fold_curve``) towards the requested value, and refines the cusp where
+d2F/dq2 changes sign along a curve (beyond it the curve continues as the other fold).
+``find_cusp`` follows the lower fold both ways and returns the nearest cusp. Along a curve
+it records alpha*, q*, tip*, dF/dalpha, d2F/dq2 (with phi scaled to int phi = 1) and the two
+smallest Hessian eigenvalues (one is zero at the fold; the other's sign tells the fold's
+stability data: a fold between a stable and an index-1 branch has it positive).
 """
 
 from __future__ import annotations
@@ -37,11 +37,13 @@ from jaxrod.design_point import DesignPoint, check_target, valid_range
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise
 from jaxrod.equilibria.folds import folds
+from jaxrod.magnet.batch import fold_pair_states
 from jaxrod.params import ParameterError
 from jaxrod.scenes.dipole import rig_of
 from jaxrod.scenes.path import along
 from jaxrod.solvers.fold_curve import FoldCurveOptions, differentiable_cusp
 from jaxrod.status import Status
+from jaxrod.stored import StoredProgram
 
 
 @dataclasses.dataclass(frozen=True)
@@ -160,14 +162,32 @@ CURVE_OPTIONS = FoldCurveOptions(ds=0.01, ds_min=1e-9, ds_max=0.02, lam_min=-mat
                                  lam_max=math.pi, tol=1e-12)
 
 
+#: Bracketing cells per end the start's fold-pair solve uses (one point: the robust setting).
+START_CELLS = 4
+
+
+def _pair_start_program(G, M, D, disc):
+    z, converged, _ = fold_pair_states(G, M, D, disc, START_CELLS)
+    return z, converged
+
+
+_pair_start = StoredProgram("fold-pair-start", _pair_start_program)
+
+
 def _start(point: DesignPoint, n: int) -> np.ndarray:
     """The lower and upper folds of ``point`` as fold-curve states w = (theta, phi, alpha,
-    u = 0), (2, 2m + 2): the folds of the rig's branch in the magnet angle from the straight
-    rod (``jaxrod.equilibria.folds``, the program its branch and equilibria share)."""
+    u = 0), (2, 2m + 2): from the batched fold-pair path (one-mode brackets refined by
+    Moore-Spence, ``jaxrod.magnet.batch``: 3 ms warm), or, where that path does not
+    converge, the generic folds of the rig's branch in the magnet angle from the straight
+    rod (``jaxrod.equilibria.folds``)."""
+    G, M, D = point.groups()
+    z, converged = jax.device_get(_pair_start(*(jnp.asarray(v, jnp.float64) for v in (G, M, D)),
+                                              planar_discretisation(n, "clamped")))
+    if converged:
+        return np.concatenate([np.asarray(z), np.zeros((2, 1))], axis=1)
     scene, angle, (a0, a1), degrees, _ = rig_of(point)
     found = sorted(folds(scene, angle, a0, a1, n, throw=False), key=lambda f: f.value)
     if len(found) != 2 or not all(f.converged for f in found):
-        G, M, D = point.groups()
         raise ParameterError(
             f"no fold to start from: the rod at G = {G:.6g}, M = {M:.6g}, D = {D:.6g} has "
             f"{sum(f.converged for f in found)} converged fold(s) with alpha in (0, 90] "
