@@ -322,8 +322,10 @@ def test_a_quasi_static_sweep_snaps_just_past_the_folds():
 
 def test_the_generic_fold_curve_of_the_papers_scene_passes_its_cusp():
     """The generic fold curve (any scene, its inputs by name) of the paper's scene, followed
-    in magnet.D, against the paper's own fold curves: its cusp bracket holds their refined
-    cusp, and its points are folds of the paper's diagram at their D."""
+    in magnet.D, against the design point's fold curves (the same engine on another path
+    and scaling, started elsewhere; their cusp is checked independently in
+    test_fold_curves): its cusp bracket holds their refined cusp, and its points are folds
+    of the paper's diagram (locate_folds, the hand-written energy) at their D."""
     cusp = jr.fold_curves(jr.DesignPoint.from_groups(G, M, D), "D", 1.5, n=N).cusp
     curve = jr.fold_curve(paper_scene(), "magnet.alpha", (0.0, math.pi / 2), "magnet.D",
                           (D, 1.5), n=N)
@@ -338,8 +340,8 @@ def test_the_generic_fold_curve_of_the_papers_scene_passes_its_cusp():
     distance = np.abs(bracket - np.array([[cusp.value], [cusp.alpha_deg]]))
     nearer = np.argmin(np.sum(distance / extent[:, None], axis=0))
     assert np.all(distance[:, nearer] <= extent)
-    # refined, the generic cusp is the paper's (two programs, one regular cusp system, each
-    # Newton to a residual of 1e-13: measured 3e-15 in D, 1e-13 deg)
+    # refined, the generic cusp is the design point's (one regular cusp system on two paths,
+    # each Newton to a residual of 1e-13: measured 3e-15 in D, 1e-13 deg)
     (refined,) = curve.cusps
     assert refined.converged and abs(refined.along_value - cusp.value) <= 1e-11
     assert abs(math.degrees(refined.value) - cusp.alpha_deg) <= 1e-9

@@ -20,7 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise, tip
+from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise, mean_functional, tip
 from jaxrod.equilibria.folds import Fold, folds
 from jaxrod.equilibria.trace import check_range
 from jaxrod.params import ParameterError
@@ -59,8 +59,9 @@ class Shift:
 SHIFT = Shift()
 
 
-def _mean(disc):
-    return disc.quad_weights @ disc.to_quad
+def _mean_row(disc):
+    """The reduced coordinate q = c . x as its row c (``mean_functional``, any geometry)."""
+    return jax.grad(mean_functional(disc))(jnp.zeros(disc.size, jnp.float64))
 
 
 def _tip_at(w, m, args):
@@ -76,9 +77,9 @@ def _trace_program(w0, directions, args, opts, capacity):
         w0, directions)
     m = args[1].size
     each = lambda f: jax.vmap(jax.vmap(f))
-    phi_q = each(_mean(args[1]).__matmul__)(runs.w[..., m:2 * m])
-    observed = (runs.w[..., -1], runs.w[..., 2 * m],
-                each(_mean(args[1]).__matmul__)(runs.w[..., :m]),
+    mean = mean_functional(args[1])
+    phi_q = each(mean)(runs.w[..., m:2 * m])
+    observed = (runs.w[..., -1], runs.w[..., 2 * m], each(mean)(runs.w[..., :m]),
                 each(lambda w: _tip_at(w, m, args))(runs.w), runs.lam_derivative / phi_q,
                 runs.cubic_form / phi_q**3, runs.smallest_eigenvalues)
     return runs, observed
@@ -115,10 +116,12 @@ def _event_program(w0, args, target, at_u, cusp):
     m = disc.size
     x, phi, lam, u = split(res.x, m)
     a = SHIFT(u, args)
-    d_lam, d_qq, _ = fold_coefficients(MODEL, x, lam, phi, a, _mean(disc).__matmul__)
+    mean = mean_functional(disc)
+    d_lam, d_qq, _ = fold_coefficients(MODEL, x, lam, phi, a, mean)
     eigs = jnp.linalg.eigvalsh(MODEL.hessian(x, lam, a))[:2]
-    report = (u, lam, _mean(disc) @ x, _tip_at(res.x, m, args), d_lam, d_qq, eigs)
-    cubic = cubic_coefficient(res.x, _mean(disc), MODEL, SHIFT, args) if cusp else jnp.nan
+    report = (u, lam, mean(x), _tip_at(res.x, m, args), d_lam, d_qq, eigs)
+    cubic = (cubic_coefficient(res.x, _mean_row(disc), MODEL, SHIFT, args) if cusp
+             else jnp.nan)
     return res, report, cubic
 
 
@@ -265,6 +268,10 @@ def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, flo
             kind = "lam" if not 0.0 <= lam <= 1.0 else "u"
             target = float(np.clip(lam if kind == "lam" else u, 0.0, 1.0))
             end = _special_point(kind, runs.w[i, k - 1], args, target, scales)
+            other = (end.along_value - origin2) / span2 if kind == "lam" else \
+                (end.value - origin) / span  # the other input, scaled: inside [0, 1]
+            if not -1e-9 <= other <= 1.0 + 1e-9:
+                end = dataclasses.replace(end, converged=False, status=Status.NOT_CONVERGED)
             ends.append(end)
             if end.converged:  # the curve ends on the range exactly
                 for c, v in zip(cols, (end.along_value, end.value, end.tip_angle_deg)):

@@ -261,21 +261,19 @@ def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) ->
     # a curve that passes the cusp comes back as the other fold: stop it just past the start
     margin = 1e-3 * abs(u_to)
     runs, observed, args = _run(point, vary, lo - margin, hi + margin, w0,
-                                                [direction, direction], n, 1.0)
+                                [direction, direction], n, 1.0)
     curves, cusp, events = [], None, []
     for i_run, start in enumerate(("lower", "upper")):
         curve, near = _curve_from(runs, observed, i_run, start, v0)
         if near is not None and cusp is None:
-            cusp = _refine("cusp", runs.w[i_run][near], 0.0, args, vary, v0,
-                           "cusp")
+            cusp = _refine("cusp", runs.w[i_run][near], 0.0, args, vary, v0, "cusp")
         events += [dataclasses.replace(e, fold=start) for e in _alpha_events(
             runs, observed, i_run, args, vary, v0, len(curve.value))]
         if curve.reaches_cusp:
             curve = _with_end(curve, cusp)
         elif abs(curve.value[-1] - v0) > abs(to - v0):  # passed `to`: end exactly there
             k = len(curve.value) - 1
-            end = _refine("u", runs.w[i_run][k], u_to, args, vary, v0,
-                          "end")
+            end = _refine("u", runs.w[i_run][k], u_to, args, vary, v0, "end")
             curve = _with_end(dataclasses.replace(curve, **{
                 f.name: getattr(curve, f.name)[:-1] for f in dataclasses.fields(curve)
                 if isinstance(getattr(curve, f.name), np.ndarray)}), end)
@@ -328,8 +326,7 @@ def trace_fold_curve(point: DesignPoint, vary: str, between: tuple[float, float]
     cusps = []
     for j in _sign_changes(test):
         near = j if abs(test[j]) < abs(test[j + 1]) else j + 1
-        cusps.append(_refine("cusp", runs.w[0][near], 0.0, args, vary, v0,
-                             "cusp"))
+        cusps.append(_refine("cusp", runs.w[0][near], 0.0, args, vary, v0, "cusp"))
     u, alpha = np.asarray(observed[0][0][:k]), np.asarray(observed[1][0][:k])
     return v0 * (1.0 + u), np.degrees(alpha), cusps, Status(int(runs.status[0]))
 
@@ -355,8 +352,7 @@ def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> CurvePoint:
     u_lo = max(CUSP_SEARCH[0], (lo / v0 - 1.0) * 0.99 if lo > 0 else CUSP_SEARCH[0])
     u_hi = min(CUSP_SEARCH[1], (hi / v0 - 1.0) * 0.99 if math.isfinite(hi) else CUSP_SEARCH[1])
     w0 = _start(point, n)
-    runs, observed, args = _run(point, vary, u_lo, u_hi, w0[[0, 0]],
-                                                [1.0, -1.0], n, 1.0)
+    runs, observed, args = _run(point, vary, u_lo, u_hi, w0[[0, 0]], [1.0, -1.0], n, 1.0)
     found = []
     for i_run in (0, 1):
         curve, near = _curve_from(runs, observed, i_run, "lower", v0)
