@@ -23,7 +23,6 @@ from jaxrod.derivatives import Structured
 from jaxrod.discretise.director import director_discretisation
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.params import check_degree
-from jaxrod.programs import jit
 from jaxrod.scenes.checks import check_scene
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, scene_path
@@ -37,6 +36,7 @@ from jaxrod.solvers.continuation import (
 from jaxrod.solvers.descent import descend
 from jaxrod.solvers.newton import newton
 from jaxrod.status import Status, check
+from jaxrod.stored import StoredProgram
 
 #: Default Chebyshev degree of the generic analyses (the paper's scenes converge to round-off
 #: from N = 12; 16 keeps a margin).
@@ -185,7 +185,7 @@ def _path_program(path, disc, origin, span, x0, given, opts, capacity):
 
 #: The one program of a scene's structure and N along any path: the equilibrium
 #: (``equilibrium``), the branch (``jaxrod.equilibria.trace``) and the fold guesses.
-path_program = jit(_path_program, static_argnames=("capacity",))
+path_program = StoredProgram("path", _path_program, static_argnames=("capacity",))
 
 
 @dataclasses.dataclass(frozen=True)

@@ -7,9 +7,11 @@ scaled coordinate, and reported with its normal form: with phi normalised to int
 (q = int theta the reduced coordinate),
 
     dF/dv = phi . d(grad E)/dv,   d2F/dq2 = D^3E[phi, phi, phi],
-    v - v* ~ c (q - q*)^2,   c = -d2F/dq2 / (2 dF/dv)
+    v - v* ~ c (q - q*)^2,   c = -d2F/dq2 / (2 dF/dv),
+    v - v* ~ c_tip (tip - tip*)^2,   c_tip = c / T^2,   T = d(tip angle)/dq along phi
 
-(the paper's Proposition "Planar saddle-node bifurcation", for any scene and input).
+(the paper's Proposition "Planar saddle-node bifurcation" and its Corollary "Fold in the
+experimental tip displacement angle", for any scene and input).
 """
 
 from __future__ import annotations
@@ -33,25 +35,32 @@ from jaxrod.equilibria.equilibrium import (
 )
 from jaxrod.equilibria.record import Branch, SpecialPoint, checked
 from jaxrod.equilibria.trace import branch_options, check_range, path_of, trace
-from jaxrod.programs import jit, padded
+from jaxrod.programs import padded
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, along
 from jaxrod.scenes.scene import Scene
 from jaxrod.solvers.folds import fold_coefficients, moore_spence_solve
 from jaxrod.status import SolverError, Status
+from jaxrod.stored import StoredProgram
 
 
 @dataclasses.dataclass(frozen=True)
 class Fold(SpecialPoint):
     """A fold of a scene's branch in the input ``vary``, refined by Moore-Spence
     (``SpecialPoint``'s fields), with ``q`` = int theta there and its normal form:
-    ``dF_dvalue``, ``d2F_dq2``, ``normal_form_c`` (module docstring) in the input's units.
+    ``dF_dvalue``, ``d2F_dq2``, ``normal_form_c``, ``tip_parabola_c`` (module docstring) in
+    the input's units, and the two smallest eigenvalues of the Hessian there
+    (``hessian_smallest``: one is zero; the other's sign tells whether the fold joins a
+    stable branch to an index-1 one).
     """
 
     q: float
     dF_dvalue: float
     d2F_dq2: float
     normal_form_c: float
+    tip_parabola_c: float = dataclasses.field(default=math.nan, kw_only=True)
+    hessian_smallest: tuple[float, float] = dataclasses.field(default=(math.nan, math.nan),
+                                                              kw_only=True)
 
     kind = "fold"
 
@@ -62,11 +71,18 @@ def _refine_one(x0, lam0, path, disc, origin, span):
     fp = moore_spence_solve(MODEL, x0, lam0, phi0, args)
     d_lam, d_qq, phi_q = fold_coefficients(None, fp.x, fp.lam, fp.null_vector, args,
                                            mean_functional(disc), jacobian=fp.newton.jacobian)
-    angle, X = tip(ALONG(fp.lam, args)[0], fp.x, disc)
-    return fp, (d_lam / span, d_qq, mean_functional(disc)(fp.x), angle, X, phi_q)
+    at = ALONG(fp.lam, args)[0]
+    (angle, X), (slope, _) = jax.jvp(lambda x: tip(at, x, disc), (fp.x,), (phi_q,))
+    eigs = jnp.linalg.eigvalsh(fp.newton.jacobian[:x0.size, :x0.size])[:2]
+    return fp, (d_lam / span, d_qq, mean_functional(disc)(fp.x), angle, X, phi_q, slope, eigs)
 
 
-_refine = jit(jax.vmap(_refine_one, in_axes=(0, 0, None, None, None, None)))
+def _refine_rows(x0, lam0, path, disc, origin, span):
+    return jax.vmap(_refine_one, in_axes=(0, 0, None, None, None, None))(x0, lam0, path, disc,
+                                                                      origin, span)
+
+
+_refine = StoredProgram("fold-refine", _refine_rows)
 
 
 def refine(scene: Scene | FileScene, b: Branch, n: int = DEFAULT_N) -> list[Fold]:
@@ -92,13 +108,16 @@ def refine(scene: Scene | FileScene, b: Branch, n: int = DEFAULT_N) -> list[Fold
     lo, hi = float(np.nanmin(b.value)), float(np.nanmax(b.value))
     folds = []
     for i in range(len(pick)):
-        d_v, d_qq, q, angle, X, phi = (np.asarray(r[i]) for r in rep)
+        d_v, d_qq, q, angle, X, phi, slope, eigs = (np.asarray(r[i]) for r in rep)
         value = float(origin + span * fp.lam[i])
+        c = float(-d_qq / (2 * d_v))
         conv = bool(fp.newton.converged[i]) and lo - 0.1 * span <= value <= hi + 0.1 * span
         folds.append(Fold(
             vary=b.vary, value=value,
             tip_angle_deg=math.degrees(float(angle)), tip_position=X, q=float(q),
-            dF_dvalue=float(d_v), d2F_dq2=float(d_qq), normal_form_c=float(-d_qq / (2 * d_v)),
+            dF_dvalue=float(d_v), d2F_dq2=float(d_qq), normal_form_c=c,
+            tip_parabola_c=c / float(slope) ** 2,
+            hessian_smallest=(float(eigs[0]), float(eigs[1])),
             state=np.asarray(fp.x[i]), null_vector=phi, converged=conv,
             residual_norm=float(fp.newton.residual_norm[i]),
             iterations=int(fp.newton.iterations[i]),
