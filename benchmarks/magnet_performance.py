@@ -99,7 +99,7 @@ def timings(n: int, repeat: int) -> dict:
     out = {}
     for E, (G, M) in CASES.items():
         scene = jr.magnet_scene(G, M, D_EXP)
-        _, diag_first, diag_warm = timed(lambda: magnet.trace_diagram(scene, n), repeat)
+        _, diag_first, diag_warm = timed(lambda: jr.diagram(scene, n), repeat)
         branch = jr.diagram(scene, n)
         report, pair_first, pair_warm = timed(lambda: magnet_folds._folds_on(scene, branch, n),
                                               repeat)
