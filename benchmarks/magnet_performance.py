@@ -99,11 +99,19 @@ def timings(n: int, repeat: int) -> dict:
     out = {}
     for E, (G, M) in CASES.items():
         scene = jr.magnet_scene(G, M, D_EXP)
-        _, diag_first, diag_warm = timed(lambda: jr.diagram(scene, n), repeat)
+        disc = jr.planar_discretisation(n, "clamped")
+        opts = magnet.default_options()
+        capacity = opts.max_points
+        opts0 = opts._replace(max_points=0)
+        _, diag_first, diag_warm = timed(lambda: magnet._diagram(scene, disc, opts0, capacity),
+                                         repeat)
         branch = jr.diagram(scene, n)
-        report, pair_first, pair_warm = timed(lambda: magnet_folds._folds_on(scene, branch, n),
-                                              repeat)
-        pair = sorted(f.alpha_deg for f in report.folds)
+        starts = [j for j in branch.fold_indices if branch.alpha[j] > 0]
+        th0 = jnp.asarray(branch.theta[starts])
+        al0 = jnp.asarray(branch.alpha[starts])
+        (fp, _), pair_first, pair_warm = timed(
+            lambda: magnet_folds._refine_batch(th0, al0, scene, disc, 1e-13), repeat)
+        pair = sorted(np.degrees(np.asarray(fp.lam)))
         ref = shooting_folds(G, M, jr.folds(scene, n=n).folds, n)
         err = max(abs(a - r) for a, r in zip(pair, ref))
         _, _, e2e_warm = timed(lambda: jr.folds(scene, n=n), max(3, repeat // 10))

@@ -205,6 +205,10 @@ def test_the_generic_folds_of_the_papers_scene_agree_with_its_diagram_and_fast_p
         assert abs(f.tip_angle_deg - ref.tip_deg) <= 1e-9
         # both in radians: alpha - alpha* ~ c (q - q*)^2
         assert abs(f.normal_form_c - ref.normal_form_c) <= 1e-7 * abs(ref.normal_form_c)
+        assert abs(f.tip_parabola_c - ref.tip_parabola_c) <= 1e-7 * abs(ref.tip_parabola_c)
+        # the Hessians of the two energies at the fold: one eigenvalue zero, the next equal
+        assert abs(f.hessian_smallest[0]) <= 1e-9
+        assert abs(f.hessian_smallest[1] - ref.hessian_smallest[1]) <= 1e-9
     fast = jr.fold_pairs(np.array([G]), np.array([M]), np.array([D]), n=N)
     assert np.allclose(sorted(math.degrees(f.value) for f in generic), fast.alpha_deg[0],
                        rtol=0, atol=1e-9)

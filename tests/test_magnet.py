@@ -8,7 +8,6 @@ import shooting_reference as shooting
 
 from jaxrod import spectral
 from jaxrod.discretise.planar import planar_discretisation
-from jaxrod.equilibria.equilibrium import path_program
 from jaxrod.magnet import diagram as magnet
 from jaxrod.magnet import folds as magnet_folds
 from jaxrod.magnet import sweep as magnet_sweep
@@ -155,9 +154,9 @@ def test_no_fold_no_hysteresis():
 
 def test_changing_parameters_does_not_recompile():
     magnet.trace_diagram(magnet.make_scene(2.2, 0.0236, D_EXP))
-    before = path_program.jitted._cache_size()
+    before = magnet._diagram.jitted._cache_size()
     magnet.trace_diagram(magnet.make_scene(3.0, 0.03, 1.3))
-    assert path_program.jitted._cache_size() == before
+    assert magnet._diagram.jitted._cache_size() == before
 
 
 def test_bad_input():

@@ -1,12 +1,14 @@
 """Exported entry points (jaxrod.stored): a program read back from the store gives the same
-results as the traced one, and a damaged file falls back to tracing."""
+results as the traced one, and a damaged file falls back to tracing (the generic branch and
+fold programs, whose inputs are a scene's path)."""
+
+import math
 
 import numpy as np
 
 from jaxrod import stored
 from jaxrod.equilibria import equilibrium, folds
 from jaxrod.magnet import diagram as magnet
-from jaxrod.magnet import folds as magnet_folds
 
 PROGRAMS = (equilibrium.path_program, folds._refine)
 
@@ -15,7 +17,7 @@ D_EXP = 11.25 / 9.2
 
 def _folds(G, M):
     scene = magnet.make_scene(G, M, D_EXP)
-    return [f.alpha_deg for f in magnet_folds.locate_folds(scene, n=12).folds]
+    return [f.value for f in folds.folds(scene.scene, "magnet.alpha", 0.0, math.pi / 2, n=12)]
 
 
 def test_programs_read_back_from_the_store_match_the_traced_ones(tmp_path):

@@ -7,28 +7,28 @@ middle branch, lower fold, disengaged branch); ``locate_folds`` refines each det
 the Moore-Spence system and reports the normal form (``jaxrod.magnet.folds``);
 ``hysteresis_sweep`` runs the experiment's quasi-static protocol and ``square_root_law``
 fits the exponent of |tip - tip*| ~ |alpha - alpha*|^(1/2) next to a fold
-(``jaxrod.magnet.sweep``). This module: the scene, the diagram's options and the diagram
-(the generic branch of the scene along the magnet's angle), and the equilibria at one magnet
-angle.
+(``jaxrod.magnet.sweep``). This module: the scene, the diagram's options and program, and
+the equilibria at one magnet angle.
 
 Everything is in radians internally; results carry degrees where the name says ``_deg``.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
-from jaxrod.equilibria.record import Branch
-from jaxrod.equilibria.trace import trace
+from jaxrod.equilibria.record import Branch, branch_from_runs
 from jaxrod.params import check, check_degree, check_track_clearance
 from jaxrod.programs import jit
-from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet
-from jaxrod.solvers.continuation import ContinuationOptions
+from jaxrod.scenes.dipole import ALPHA_MODEL, DipoleMagnet, tip_angle
+from jaxrod.solvers.continuation import ContinuationOptions, continuation_run
 from jaxrod.solvers.newton import newton
+from jaxrod.stored import StoredProgram
 
 #: Default Chebyshev degree. At the paper's parameters the fold angles reach their round-off
 #: floor (~1e-11 degrees) from N = 12 (docs/accuracy.md); 16 keeps a margin.
@@ -37,7 +37,7 @@ DEFAULT_N = 16
 
 
 def alpha_energy(theta, alpha, args):
-    """E_perm(theta) at magnet angle alpha; args = (scene, disc)."""
+    """E_perm(theta) at magnet angle alpha; args = (scene, disc). The continuation energy."""
     scene, disc = args
     return scene.with_alpha(alpha).energy(theta, disc)
 
@@ -52,6 +52,13 @@ def make_scene(G: float, M: float, D: float, magnet_radius: float | None = None)
     check("M", M)
     check_track_clearance(D, 0.0 if magnet_radius is None else magnet_radius)
     return DipoleMagnet(float(G), float(M), float(D), 0.0)
+
+
+def _observables_of(theta, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation):
+    """(q, tip angle, energy) at rows of theta and alpha (NaN rows stay NaN)."""
+    one = lambda th, a: (disc.mean(th), tip_angle(th, disc),
+                         ALPHA_MODEL.energy(th, a, (scene, disc)))
+    return jax.vmap(one)(theta, alpha)
 
 
 def default_options(max_points: int = 400) -> ContinuationOptions:
@@ -71,6 +78,19 @@ def figure_options() -> ContinuationOptions:
     return default_options()._replace(ds_max=FIGURE_DS_MAX)
 
 
+def _diagram_program(scene: DipoleMagnet, disc: PlanarDiscretisation,
+                     options: ContinuationOptions, capacity: int):
+    # the straight rod is an equilibrium at alpha = 0 (mirror symmetry; see fold_guesses)
+    trace = lambda d: continuation_run(ALPHA_MODEL, jnp.zeros(disc.size), 0.0, (scene, disc),
+                                       options, capacity, d)
+    runs = jax.vmap(trace)(jnp.array([-1.0, 1.0]))
+    observed = jax.vmap(lambda th, a: _observables_of(th, a, scene, disc))(runs.x, runs.lam)
+    return runs, observed
+
+
+_diagram = StoredProgram("magnet-diagram", _diagram_program, static_argnames=("capacity",))
+
+
 def _alpha_residual(theta, args):
     alpha, scene, disc = args
     return ALPHA_MODEL.gradient(theta, alpha, (scene, disc))
@@ -88,41 +108,27 @@ def _equilibrium(theta0, alpha, scene: DipoleMagnet, disc: PlanarDiscretisation)
                   jacobian=_alpha_jacobian)
 
 
-def _half(scene: DipoleMagnet, n: int, options: ContinuationOptions, bound: float) -> Branch:
-    """The generic branch of the scene along the magnet angle from the straight rod at
-    alpha = 0 to ``bound`` (radians), on the scale alpha = +-lam (the diagram's steps)."""
-    opts = options._replace(lam_min=0.0, lam_max=abs(bound))
-    x0 = np.zeros(planar_discretisation(n, "clamped").size)
-    return trace(scene.scene, "magnet.alpha", 0.0, math.copysign(1.0, bound), n, x0, opts)
-
-
-def _joined(left: Branch, right: Branch) -> Branch:
-    """One branch from ``left`` reversed (its tangent turned) and ``right``, which start at
-    the same point (kept once)."""
-    flip = {f.name: getattr(left, f.name)[::-1] for f in dataclasses.fields(left)
-            if isinstance(getattr(left, f.name), np.ndarray)}
-    flip["tangent_value"] = -flip["tangent_value"]
-    both = {k: np.concatenate([v, getattr(right, k)[1:]]) for k, v in flip.items()}
-    return dataclasses.replace(right, **both, status=left.status + right.status,
-                               complete=left.complete and right.complete)
-
-
 def trace_diagram(scene: DipoleMagnet, n: int = DEFAULT_N,
                   options: ContinuationOptions | None = None) -> Branch:
-    """The whole planar diagram for alpha in [-90, 90] degrees through the straight rod: the
-    generic branch of the scene along ``magnet.alpha`` (``jaxrod.equilibria.trace``: one
-    program for every scene of its structure) from the straight rod at alpha = 0 in both
-    directions, joined. ``options``: the steps in alpha (radians) and the bounds.
+    """The whole planar diagram for alpha in [-90, 90] degrees through the straight rod.
+
+    One compiled program runs both directions from (theta, alpha) = (0, 0) (vmapped).
 
     Equilibria solve grad E_perm(theta; alpha) = 0, the discrete planar Euler-Lagrange
     equation. Paper: Lemma ``thm:planar_equilibria`` (eq. ``planar_EL``), Corollary
     ``cor:planar_branch``.
     """
-    check_degree(n, "N-magnet")
+    disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     options = options or default_options()
-    left, right = (_half(scene, n, options, stop) for stop in (options.lam_min,
-                                                                 options.lam_max))
-    return _joined(left, right)
+    runs, observed = jax.device_get(  # index on the host
+        _diagram(scene, disc, options._replace(max_points=0), options.max_points))
+    if not np.all(runs.residual_norm[:, 0] <= options.tol):
+        raise RuntimeError("the straight rod is not an equilibrium at alpha = 0 (residual "
+                           f"{np.max(runs.residual_norm[:, 0]):.3g}): the scene is not "
+                           "mirror-symmetric there")
+    left, right = (jax.tree_util.tree_map(lambda v, i=i: v[i], (runs, observed))
+                   for i in (0, 1))
+    return branch_from_runs([(left[0], True, left[1]), (right[0], False, right[1])])
 
 
 def equilibria_at(scene: DipoleMagnet, branch: Branch, alpha: float,

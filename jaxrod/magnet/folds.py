@@ -14,7 +14,6 @@ import numpy as np
 from jaxrod.discretise.planar import PlanarDiscretisation, planar_discretisation
 from jaxrod.equilibria.folds import Fold as SceneFold
 from jaxrod.equilibria.folds import folds as scene_folds
-from jaxrod.equilibria.folds import refine
 from jaxrod.equilibria.record import Branch
 from jaxrod.magnet.diagram import DEFAULT_N, default_options, trace_diagram
 from jaxrod.params import RANGES, check, check_degree, check_track_clearance
@@ -23,12 +22,18 @@ from jaxrod.scenes.dipole import (
     ALPHA_MODEL,
     DipoleMagnet,
     preset_or_scene,
+    tip_angle,
+    tip_position,
 )
 from jaxrod.solvers.continuation import continuation_run
 from jaxrod.solvers.folds import (
+    FoldPoint,
     differentiable_fold,
+    fold_coefficients,
+    moore_spence_solve,
 )
 from jaxrod.status import SolverError, Status
+from jaxrod.stored import StoredProgram
 
 
 class PaperNames:
@@ -54,19 +59,20 @@ class PaperNames:
 
 @dataclasses.dataclass(frozen=True)
 class Fold(PaperNames, SceneFold):
-    """A saddle-node of the paper's planar branch in the magnet angle: the fold record of
-    every scene (``jaxrod.equilibria.folds.Fold``, with ``vary`` = "magnet.alpha" and
-    ``value`` in radians; its ``tip_parabola_c`` is the paper's Corollary "Fold in the
-    experimental tip displacement angle") named ``kind`` "lower" or "upper" (or "fold"
-    beyond a pair), ``opens`` the side of the fold where the branch lies, and the paper's
-    names of the common fields (``PaperNames``).
+    """A saddle-node of the paper's planar branch in the magnet angle, refined by
+    Moore-Spence: the fold record of every scene (``jaxrod.equilibria.folds.Fold``, with
+    ``vary`` = "magnet.alpha" and ``value`` in radians) and the paper's extras.
+
+    ``normal_form_c``: alpha - alpha* ~ c (q - q*)^2 (radians); ``tip_parabola_c``:
+    alpha - alpha* ~ c_tip (tip - tip*)^2 (radians; the paper's Corollary "Fold in the
+    experimental tip displacement angle", c_tip = -F_qq / (2 F_alpha T*^2)); ``kind``
+    "lower" or "upper" (or "fold" beyond a pair); ``opens`` the side of the fold where the
+    branch lies; ``hessian_smallest`` its two smallest Hessian eigenvalues. The paper's
+    names read the common fields (``PaperNames``).
     """
 
+    opens: str = dataclasses.field(default="", kw_only=True)
     kind: str = dataclasses.field(default="fold", kw_only=True)  # the paper's: lower, upper
-
-    @property
-    def opens(self) -> str:
-        return "increasing alpha" if self.normal_form_c > 0 else "decreasing alpha"
 
     def as_dict(self) -> dict:
         return {
@@ -79,6 +85,36 @@ class Fold(PaperNames, SceneFold):
             "converged": self.converged, "residual_norm": self.residual_norm,
             "iterations": self.iterations,
         }
+
+
+def _fold_report(fp: FoldPoint, disc: PlanarDiscretisation):
+    """The normal form and stability data of a converged fold, from its Moore-Spence
+    Jacobian (no new assembly)."""
+    x, J = fp.x, fp.newton.jacobian
+    d_alpha, d_qq, phi_q = fold_coefficients(None, x, fp.lam, fp.null_vector, None, disc.mean,
+                                             jacobian=J)
+    c = -d_qq / (2.0 * d_alpha)
+    X = tip_position(x, disc)
+    V = jax.jvp(lambda th: tip_position(th, disc), (x,), (phi_q,))[1]
+    T = (X[1] * V[0] - X[0] * V[1]) / jnp.dot(X, X)
+    m = x.shape[0]
+    eigs = jnp.linalg.eigvalsh(J[:m, :m])
+    return (d_alpha, d_qq, c, c / T**2, disc.mean(x), tip_angle(x, disc), eigs[:2], phi_q, X)
+
+
+def _refine_one(theta0, alpha0, scene, disc, tol):
+    args = (scene, disc)
+    _, V = jnp.linalg.eigh(ALPHA_MODEL.hessian(theta0, alpha0, args))
+    fp = moore_spence_solve(ALPHA_MODEL, theta0, alpha0, V[:, 0], args, tol)
+    return fp, _fold_report(fp, disc)
+
+
+def _refine_program(theta0, alpha0, scene, disc, tol):
+    return jax.vmap(_refine_one, in_axes=(0, 0, None, None, None))(theta0, alpha0, scene, disc,
+                                                                    tol)
+
+
+_refine_batch = StoredProgram("magnet-refine", _refine_program)
 
 
 #: Capacity of the continuation that finds the fold guesses (alpha up to 90 degrees).
@@ -173,6 +209,33 @@ def fold_pair(scene: DipoleMagnet, n: int = 12, tol: float = 1e-13, throw: bool 
     return np.degrees(np.asarray(alphas)), bool(converged)
 
 
+def refine_folds(scene: DipoleMagnet, disc: PlanarDiscretisation, theta0, alpha0,
+                 tol: float = 1e-13) -> list[Fold]:
+    """Moore-Spence from approximate folds (rows of theta0, alpha0), all in one vmapped call.
+
+    The null-vector guess is the lowest eigenvector of the Hessian at each start.
+    """
+    theta0 = np.atleast_2d(np.asarray(theta0, np.float64))
+    alpha0 = np.atleast_1d(np.asarray(alpha0, np.float64))
+    # on the host at once: indexing device arrays would compile a program per index
+    fp, rep = jax.device_get(_refine_batch(theta0, alpha0, scene, disc, tol))
+    folds = []
+    for i in range(alpha0.shape[0]):
+        d_alpha, d_qq, c, c_tip, q, tip, eigs, phi_q, X = (np.asarray(v[i]) for v in rep)
+        conv = bool(fp.newton.converged[i])
+        folds.append(Fold(
+            vary="magnet.alpha", value=float(fp.lam[i]), tip_angle_deg=math.degrees(float(tip)),
+            tip_position=np.array([X[0], 0.0, X[1]]), state=np.asarray(fp.x[i]),
+            null_vector=phi_q, converged=conv, residual_norm=float(fp.newton.residual_norm[i]),
+            iterations=int(fp.newton.iterations[i]),
+            status=Status.of(conv), q=float(q),
+            dF_dvalue=float(d_alpha), d2F_dq2=float(d_qq), normal_form_c=float(c), kind="",
+            tip_parabola_c=float(c_tip),
+            opens="increasing alpha" if float(c) > 0 else "decreasing alpha",
+            hessian_smallest=(float(eigs[0]), float(eigs[1]))))
+    return folds
+
+
 @dataclasses.dataclass(frozen=True)
 class FoldReport:
     """Folds with alpha > 0 (lower first), the hysteresis width, and the diagram."""
@@ -207,7 +270,7 @@ class FoldReport:
 
 
 def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None = None,
-                 throw: bool = True) -> FoldReport:
+                 tol: float = 1e-13, throw: bool = True) -> FoldReport:
     """Detect the folds on the diagram and refine those with alpha > 0.
 
     The two folds with alpha > 0 are named by their angle: ``upper`` (the engaged branch
@@ -223,16 +286,16 @@ def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None 
     naming the problems) where the report is not converged; False: the report says so
     (``converged`` and ``status``).
     """
-    check_degree(n, "N-magnet")
+    disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     given = branch is not None
     branch = branch or trace_diagram(scene, n)
-    report = _folds_on(scene, branch, n)
+    report = _folds_on(scene, disc, branch, n, tol)
     options = default_options()
     for _ in range(2):  # near the cusp the two folds can fall within one step: refine it
         if given or not report.problems:
             break
         options = options._replace(ds_max=0.2 * options.ds_max, max_points=2 * options.max_points)
-        report = _folds_on(scene, trace_diagram(scene, n, options), n)
+        report = _folds_on(scene, disc, trace_diagram(scene, n, options), n, tol)
     if throw and not report.converged:
         bad = [f.kind for f in report.folds if not f.converged]
         why = list(report.problems) + ([f"fold(s) {', '.join(bad)} not converged"] if bad
@@ -247,15 +310,14 @@ def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None 
 NEAR_SINGULAR = 1e-2
 
 
-def _folds_on(scene, branch: Branch, n: int) -> FoldReport:
-    """The folds at alpha > 0 of the diagram ``branch``: those detected on its part from the
-    straight rod on, refined by the generic engine (``jaxrod.equilibria.folds.refine``)."""
-    i = branch.straight_index
-    right = dataclasses.replace(branch, **{
-        f.name: getattr(branch, f.name)[i:] for f in dataclasses.fields(branch)
-        if isinstance(getattr(branch, f.name), np.ndarray)})
-    folds = [Fold(**{f.name: getattr(g, f.name) for f in dataclasses.fields(g)})
-             for g in refine(scene.scene, right, n) if g.value > 0.0]
+def _folds_on(scene, disc, branch: Branch, n: int, tol) -> FoldReport:
+    starts = []
+    for i in branch.fold_indices:
+        j = i if abs(branch.tangent_alpha[i]) < abs(branch.tangent_alpha[i + 1]) else i + 1
+        if branch.alpha[j] > 0.0:
+            starts.append(j)
+    folds = refine_folds(scene, disc, branch.theta[starts], branch.alpha[starts], tol) \
+        if starts else []
     folds.sort(key=lambda f: f.alpha_deg)
     problems = []
     same = [i for i in range(len(folds) - 1)
@@ -289,7 +351,7 @@ def folds(scene, vary: str | None = None, start: float | None = None,
 
     The paper's rig as a preset: ``folds(DipoleMagnet(G, M, D))`` without ``vary`` is its
     fold pair in the magnet's angle, named ``lower`` and ``upper`` (``locate_folds``, with
-    the near-cusp re-trace; ``options``: branch, throw)."""
+    the near-cusp re-trace; ``options``: branch, tol, throw)."""
     return preset_or_scene(scene, vary, lambda s: locate_folds(s, n, **options),
                            lambda s: scene_folds(s, vary, start, stop, n, **options),
                            "the folds are met along")
