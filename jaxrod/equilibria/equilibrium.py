@@ -86,19 +86,15 @@ def tip_tangent(scene: Scene, x, disc):
     return jnp.arctan2(d3[0], d3[2])
 
 
-def _residual(x, args):
+def _linearise(x, args):
     lam, model, margs = args
-    return model.gradient(x, lam, margs)
-
-
-def _jacobian(x, args):
-    lam, model, margs = args
-    return model.hessian(x, lam, margs)
+    return model.gradient_and_hessian(x, lam, margs)
 
 
 def solve_at(model, x0, lam, args, tol=1e-12):
-    """Newton for grad E(x, lam) = 0 from x0 (traceable)."""
-    return newton(_residual, x0, (lam, model, args), tol=tol, jacobian=_jacobian)
+    """Newton for grad E(x, lam) = 0 from x0 (traceable): the gradient and the Hessian from
+    one assembly, in one place of the program."""
+    return newton(None, x0, (lam, model, args), tol=tol, linearise=_linearise)
 
 
 def loaded(model, run, args, snapped):

@@ -74,8 +74,9 @@ class Path:
         p = jnp.asarray(p, jnp.float64).reshape(-1)
         safe = jnp.where(p == 0.0, 1.0, p)  # negative powers are never chosen at p = 0
         table = jnp.stack([(safe if k < 0 else p) ** k for k in POWERS], axis=-1)  # (P, 7)
-        index = self.powers.astype(jnp.int32) - POWERS.start           # (S, P)
-        factors = jnp.take_along_axis(table[None, :, :], index[:, :, None], axis=2)[..., 0]
+        # the power of each entry picked by a one-hot product (exact: ones and zeros)
+        pick = (self.powers[..., None] == jnp.arange(POWERS.start, POWERS.stop)).astype(p.dtype)
+        factors = jnp.einsum("spk,pk->sp", pick, table)                 # (S, P)
         flat = self.base + self.coef * jnp.prod(factors, axis=1)
         leaves, treedef = jax.tree_util.tree_flatten(self.template)
         out, start = [], 0

@@ -82,31 +82,35 @@ def unit_tangent(system, J, t_prev):
     return t / jnp.sqrt(system.inner(t, t))
 
 
-def arclength_run(system, data, w0, t0, aux0, out0, control: StepControl, options,
+def arclength_run(system, data, w0, orient, aux0, out0, control: StepControl, options,
                   capacity: int, event_status: int):
-    """Follow the curve of ``system`` from the point w0 with unit tangent t0 (module
-    docstring). ``out0`` holds point 0 already; returns (out, num_points, status,
-    rejected_steps)."""
+    """Follow the curve of ``system`` from the point w0 (module docstring); ``out0`` is the
+    empty record. The first pass of the loop is the start itself: the corrector at w0 (a
+    converged point needs no step) gives the Jacobian there and the unit tangent t0 with
+    <t0, orient> > 0, recorded as point 0; so the program holds one copy of the system's
+    linearisation. Returns (out, num_points, status, rejected_steps)."""
 
     def step(s: _State) -> _State:
-        w_pred = s.w + s.ds * s.t
+        first = s.k < 0
+        w_pred = jnp.where(first, s.w, s.w + s.ds * s.t)
         res = newton(None, w_pred, (system, w_pred, s.t, s.aux, data), tol=control.tol,
                      linearise=_corrector, keep_jacobian=True)
         aux, J = system.accepted(res.x, s.aux, res.jacobian[:-1])
         t_new = unit_tangent(system, J, s.t)
-        accept = res.converged & (system.inner(t_new, s.t) > 0.9) \
-            & jnp.all(jnp.isfinite(t_new))
+        accept = first | (res.converged & (system.inner(t_new, s.t) > 0.9)
+                          & jnp.all(jnp.isfinite(t_new)))
         k = s.k + jnp.where(accept, 1, 0)
-        event = system.event(res.x, t_new, s.t, J, s.out, s.k)
+        event = ~first & system.event(res.x, t_new, s.t, J, s.out, s.k)
         out = jax.lax.cond(accept, lambda o: system.record(o, k, res.x, t_new, J, res),
                            lambda o: o, s.out)
         events = s.events + jnp.where(accept & event, 1, 0)
-        ds = jnp.where(accept, jnp.where(res.iterations <= 3,
-                                         jnp.minimum(s.ds * control.growth, control.ds_max),
-                                         s.ds),
-                       0.5 * s.ds)
+        ds = jnp.where(first, s.ds,
+                       jnp.where(accept, jnp.where(res.iterations <= 3,
+                                                   jnp.minimum(s.ds * control.growth,
+                                                               control.ds_max), s.ds),
+                                 0.5 * s.ds))
         w = jnp.where(accept, res.x, s.w)
-        status = jnp.where(accept & system.outside(w, options), int(REACHED_BOUND),
+        status = jnp.where(accept & ~first & system.outside(w, options), int(REACHED_BOUND),
                            jnp.where(events >= control.max_events, int(event_status),
                                      jnp.where(k >= capacity - 1, int(CAPACITY_FULL),
                                                jnp.where(ds < control.ds_min,
@@ -115,7 +119,7 @@ def arclength_run(system, data, w0, t0, aux0, out0, control: StepControl, option
         return _State(w, jnp.where(accept, t_new, s.t), aux, ds, k,
                       s.rejected + jnp.where(accept, 0, 1), events, status, out)
 
-    init = _State(w0, t0, aux0, jnp.asarray(control.ds, w0.dtype), jnp.asarray(0),
+    init = _State(w0, orient, aux0, jnp.asarray(control.ds, w0.dtype), jnp.asarray(-1),
                   jnp.asarray(0), jnp.asarray(0), jnp.asarray(int(RUNNING)), out0)
     final = jax.lax.while_loop(lambda s: s.status == int(RUNNING), step, init)
     return final.out, final.k + 1, final.status, final.rejected

@@ -38,7 +38,6 @@ from jaxrod.solvers.arclength import (
     STEP_TOO_SMALL,
     StepControl,
     arclength_run,
-    unit_tangent,
 )
 from jaxrod.status import Status
 
@@ -160,11 +159,9 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
     model = as_model(energy)
     m = x0.shape[0]
     y0 = jnp.append(x0, lam0)
-    F0, H0, g_lam0 = model.linearisation(x0, lam0, args)
-    system = _Equilibria(model, m, spectrum, H0.dtype)
-    # the unit tangent at a regular point, oriented so that d lam has the sign of direction
-    e = jnp.zeros(m + 1, H0.dtype).at[-1].set(1.0)
-    t0 = jnp.sign(direction) * unit_tangent(system, jnp.hstack([H0, g_lam0[:, None]]), e)
+    system = _Equilibria(model, m, spectrum, y0.dtype)
+    # the first tangent is oriented so that d lam has the sign of direction
+    orient = jnp.zeros(m + 1, y0.dtype).at[-1].set(jnp.sign(direction))
     nan = jnp.full(capacity, jnp.nan)
     out = RawBranch(
         x=jnp.full((capacity, m), jnp.nan), lam=nan, tangent_lam=nan,
@@ -172,11 +169,10 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
         morse_index=jnp.full(capacity, -1), newton_iterations=jnp.full(capacity, -1),
         residual_norm=nan, num_points=jnp.asarray(0), status=jnp.asarray(int(RUNNING)),
         rejected_steps=jnp.asarray(0))
-    out = _record(out, 0, y0, t0, H0, 0, jnp.max(jnp.abs(F0)), spectrum)
     control = StepControl(opts.ds, opts.ds_min, opts.ds_max, opts.growth, opts.tol,
                           opts.max_folds)
     out, num, status, rejected = arclength_run(
-        system, args, y0, t0, None, out, control, opts, capacity,
+        system, args, y0, orient, None, out, control, opts, capacity,
         FOLDS_FOUND)
     return out._replace(num_points=num, status=status, rejected_steps=rejected)
 

@@ -18,7 +18,7 @@ from typing import Any, NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxrod.derivatives import EnergyModel
+from jaxrod.derivatives import Autodiff, EnergyModel, as_model
 
 
 class DescentResult(NamedTuple):
@@ -34,46 +34,41 @@ def descend(energy: Callable[[jax.Array, Any], jax.Array] | EnergyModel, x0: jax
     """Descend ``energy(x, args)`` from x0 to a point with |grad|_inf <= tol.
 
     ``energy`` may also be an ``EnergyModel`` (assembled derivatives), evaluated at ``lam``.
+    One ``lax.while_loop`` whose every pass tries one point x + t d (the first x0 itself): the
+    energy, gradient and Hessian are evaluated in one place (the program holds one copy of
+    them). An accepted point gives the next direction; a rejected one halves t (Armijo
+    backtracking).
     """
-    if isinstance(energy, EnergyModel):
-        model = energy
-        energy = lambda x, a: model.energy(x, lam, a)
-        grad = lambda x, a: model.gradient(x, lam, a)
-        hess = lambda x, a: model.hessian(x, lam, a)
-    else:
-        grad = jax.grad(energy)
-        hess = jax.hessian(energy)
+    model = as_model(energy) if isinstance(energy, EnergyModel) else Autodiff(
+        lambda x, _, a: energy(x, a))
 
-    def step(state):
-        x, _, k = state
-        g = grad(x, args)
-        H = hess(x, args)
+    def evaluate(x):
+        g, H = model.gradient_and_hessian(x, lam, args)
         lam_min = jnp.linalg.eigvalsh(0.5 * (H + H.T))[0]
         mu = jnp.maximum(0.0, shift * (1.0 + jnp.abs(lam_min)) - lam_min)
         d = jnp.linalg.solve(H + mu * jnp.eye(x.shape[0]), -g)
-        e0 = energy(x, args)
-        g0 = jnp.max(jnp.abs(g))
-        slope = jnp.dot(g, d)
+        return model.energy(x, lam, args), jnp.max(jnp.abs(g)), d, mu, jnp.dot(g, d)
 
-        def trial(t):
-            x1 = x + t * d
-            return t, energy(x1, args), jnp.max(jnp.abs(grad(x1, args)))
-
-        def bad(c):
-            t, e, gn = c
-            armijo = e <= e0 + 1e-4 * t * slope
-            # Near the minimum the energy decrease (~|g|^2) drowns in round-off of E; there a
-            # full Newton step on a positive definite Hessian is accepted if |g| drops.
-            quadratic = (mu == 0.0) & (t == 1.0) & (gn < 0.5 * g0)
-            return ~(armijo | quadratic) & (t > 1e-12)
-
-        t, _, gnorm = jax.lax.while_loop(bad, lambda c: trial(0.5 * c[0]), trial(1.0))
-        return x + t * d, gnorm, k + 1
+    def step(state):
+        x, e, gnorm, d, mu, slope, t, k = state
+        x1 = x + t * d
+        e1, gn1, d1, mu1, slope1 = evaluate(x1)
+        armijo = e1 <= e + 1e-4 * t * slope
+        # Near the minimum the energy decrease (~|g|^2) drowns in round-off of E; there a full
+        # Newton step on a positive definite Hessian is accepted if |g| drops.
+        quadratic = (mu == 0.0) & (t == 1.0) & (gn1 < 0.5 * gnorm)
+        accept = armijo | quadratic | (t <= 1e-12)
+        new = (x1, e1, gn1, d1, mu1, slope1, jnp.ones_like(t), k + 1)
+        old = (x, e, gnorm, d, mu, slope, 0.5 * t, k)
+        return jax.tree_util.tree_map(lambda u, v: jnp.where(accept, u, v), new, old)
 
     def go_on(state):
-        _, gnorm, k = state
-        return (gnorm > tol) & (k < max_steps) & jnp.isfinite(gnorm)
+        gnorm, k = state[2], state[7]
+        return (k < 0) | ((gnorm > tol) & (k < max_steps) & jnp.isfinite(gnorm))
 
-    g0 = jnp.max(jnp.abs(grad(x0, args)))
-    x, gnorm, k = jax.lax.while_loop(go_on, step, (x0, g0, jnp.asarray(0)))
+    # the first pass evaluates x0 itself (t = 0, accepted): one copy of the evaluation
+    zero = jnp.zeros((), x0.dtype)
+    start = (x0, jnp.asarray(jnp.inf, x0.dtype), zero, jnp.zeros_like(x0), zero, zero, zero,
+             jnp.asarray(-1))
+    x, _, gnorm, *_, k = jax.lax.while_loop(go_on, step, start)
     return DescentResult(x, gnorm <= tol, gnorm, k)

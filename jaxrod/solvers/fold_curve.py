@@ -57,7 +57,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrod.derivatives import EnergyModel
-from jaxrod.solvers.arclength import StepControl, arclength_run, unit_tangent
+from jaxrod.solvers.arclength import StepControl, arclength_run
 from jaxrod.solvers.continuation import (
     RUNNING,
     STATUS_MESSAGES,
@@ -217,24 +217,21 @@ def fold_curve_run(model: EnergyModel, args_at: ArgsMap, w0, args, opts: FoldCur
     m = (w0.shape[0] - 2) // 2
     system = _FoldCurve(model, args_at, m, w0.dtype)
     ell0 = _unit_ell(w0[m:2 * m])
-    R0, J0 = fold_linearisation(w0, ell0, model, args_at, args)
-    e_u = jnp.zeros_like(w0).at[-1].set(1.0)
-    t0 = unit_tangent(system, J0, e_u)
-    t0 = jnp.where(t0[-1] * direction < 0, -t0, t0)
+    # the first tangent is oriented so that du has the sign of direction
+    orient = jnp.zeros_like(w0).at[-1].set(jnp.sign(direction))
     nan = jnp.full(capacity, jnp.nan, w0.dtype)
     out = RawFoldCurve(
-        w=jnp.full((capacity, w0.shape[0]), jnp.nan, w0.dtype).at[0].set(w0),
-        tangent=jnp.full((capacity, w0.shape[0]), jnp.nan, w0.dtype).at[0].set(t0),
+        w=jnp.full((capacity, w0.shape[0]), jnp.nan, w0.dtype),
+        tangent=jnp.full((capacity, w0.shape[0]), jnp.nan, w0.dtype),
         cusp_test=nan, lam_derivative=nan, cubic_form=nan,
         smallest_eigenvalues=jnp.full((capacity, 2), jnp.nan, w0.dtype),
-        newton_iterations=jnp.full(capacity, -1).at[0].set(0),
-        residual_norm=nan.at[0].set(jnp.max(jnp.abs(R0))), num_points=jnp.asarray(0),
-        status=jnp.asarray(int(RUNNING)), rejected_steps=jnp.asarray(0))
-    out = _record_data(out, 0, J0, w0[m:2 * m])
+        newton_iterations=jnp.full(capacity, -1), residual_norm=nan,
+        num_points=jnp.asarray(0), status=jnp.asarray(int(RUNNING)),
+        rejected_steps=jnp.asarray(0))
     control = StepControl(opts.ds, opts.ds_min, opts.ds_max, opts.growth, opts.tol,
                           opts.max_cusps)
-    out, num, status, rejected = arclength_run(system, args, w0, t0, ell0, out, control, opts,
-                                               capacity, CUSP_PASSED)
+    out, num, status, rejected = arclength_run(system, args, w0, orient, ell0, out, control,
+                                               opts, capacity, CUSP_PASSED)
     return out._replace(num_points=num, status=status, rejected_steps=rejected)
 
 

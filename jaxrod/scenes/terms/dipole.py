@@ -48,6 +48,7 @@ class Dipole:
         """M Phi at a tip in the plane, X = (X1, X3) (e1, e3 components): with |p| = 1,
         p . r = p . X - D and |r|^2 = |X|^2 - 2 D p . X + D^2, where only p's in-plane
         components enter p . X."""
-        px = jnp.sin(self.alpha) * jnp.cos(self.beta) * X[0] + jnp.cos(self.alpha) * X[1]
-        r2 = jnp.dot(X, X) - 2.0 * self.D * px + self.D**2
-        return self.M * (px - self.D) / r2**1.5
+        px = jnp.dot(jnp.stack([jnp.sin(self.alpha) * jnp.cos(self.beta), jnp.cos(self.alpha)]),
+                     X)
+        r2 = jnp.dot(X, X) - 2.0 * self.D * px + self.D * self.D
+        return self.M * (px - self.D) * jax.lax.rsqrt(r2) ** 3
