@@ -184,7 +184,8 @@ def implicit_newton(residual: Callable[[jax.Array, Any], jax.Array] | None, x0: 
     where dR/dparams . dparams is one forward-mode pass through ``residual`` at the root
     (give it with ``linearise`` where it is cheaper than the linearisation) and dR/dx is the
     exact Jacobian Newton uses (``jacobian``, or ``linearise`` giving both, as in
-    ``newton``; forward-mode autodiff of ``residual`` when neither is given). Newton's
+    ``newton``; forward-mode autodiff of ``residual`` when neither is given), the one of
+    Newton's last step (at the root). Newton's
     iterations are never differentiated and the starting point carries no gradient.
     ``stats`` = (converged as 0/1, residual norm, iterations) as a float array, with zero
     tangent. Under ``vmap`` each batch element gets its own solve; under ``jacfwd`` the
@@ -198,19 +199,24 @@ def implicit_newton(residual: Callable[[jax.Array, Any], jax.Array] | None, x0: 
     return _implicit_root(residual, linearise, tol, jax.lax.stop_gradient(x0), params)
 
 
+def _root(linearise, tol, x0, params):
+    """(x, stats, the Jacobian at x) of Newton's solve (its last linearisation: no second
+    copy of it in the program)."""
+    res = newton(None, x0, params, tol=tol, linearise=linearise, keep_jacobian=True)
+    return res.x, jnp.stack([res.converged.astype(x0.dtype), res.residual_norm,
+                             res.iterations.astype(x0.dtype)]), res.jacobian
+
+
 @functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1, 2))
 def _implicit_root(residual, linearise, tol, x0, params):
-    res = newton(None, x0, params, tol=tol, linearise=linearise)
-    return res.x, jnp.stack([res.converged.astype(x0.dtype), res.residual_norm,
-                             res.iterations.astype(x0.dtype)])
+    return _root(linearise, tol, x0, params)[:2]
 
 
 @_implicit_root.defjvp
 def _implicit_root_jvp(residual, linearise, tol, primals, tangents):
     x0, params = primals
     _, dparams = tangents
-    x, stats = _implicit_root(residual, linearise, tol, x0, params)
-    _, J = linearise(x, params)
+    x, stats, J = _root(linearise, tol, x0, params)
     dR = jax.jvp(lambda p: residual(x, p), (params,), (dparams,))[1]
     dx = -jnp.linalg.solve(J, dR)
     return (x, stats), (dx, jnp.zeros_like(stats))
