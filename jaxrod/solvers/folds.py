@@ -56,9 +56,8 @@ def moore_spence_residual(z, data):
     model = as_model(energy)
     m = ell.shape[0]
     x, phi, lam = z[:m], z[m:2 * m], z[-1]
-    F = model.gradient(x, lam, args)
-    H = model.hessian(x, lam, args)
-    return jnp.concatenate([F, H @ phi, jnp.atleast_1d(ell @ phi - 1.0)])
+    F, Hphi = _directional_gradient(model, x, lam, args, phi)  # H phi without H
+    return jnp.concatenate([F, Hphi, jnp.atleast_1d(ell @ phi - 1.0)])
 
 
 def moore_spence_system(blocks: FoldJet, phi, ell):
