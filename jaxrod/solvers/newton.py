@@ -196,27 +196,39 @@ def implicit_newton(residual: Callable[[jax.Array, Any], jax.Array] | None, x0: 
         linearise = lambda x, p: (residual(x, p), jac(x, p))
     if residual is None:
         residual = lambda x, p: linearise(x, p)[0]
-    return _implicit_root(residual, linearise, tol, jax.lax.stop_gradient(x0), params)
+    return _implicit_root(residual, linearise, tol, jax.lax.stop_gradient(x0), params)[:2]
 
 
-def _root(linearise, tol, x0, params):
-    """(x, stats, the Jacobian at x) of Newton's solve (its last linearisation: no second
-    copy of it in the program)."""
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1, 2))
+def _implicit_root(residual, linearise, tol, x0, params):
+    """(x, stats, the Jacobian at x): Newton's solve and the Jacobian of its last step (at
+    the root), which the tangent rule solves with: no second linearisation in the program.
+    The Jacobian output carries no tangent; the rule differentiates it through
+    ``_jacobian_at``."""
     res = newton(None, x0, params, tol=tol, linearise=linearise, keep_jacobian=True)
     return res.x, jnp.stack([res.converged.astype(x0.dtype), res.residual_norm,
                              res.iterations.astype(x0.dtype)]), res.jacobian
 
 
-@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1, 2))
-def _implicit_root(residual, linearise, tol, x0, params):
-    return _root(linearise, tol, x0, params)[:2]
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0,))
+def _jacobian_at(linearise, J, x, params):
+    """J, the Jacobian of ``linearise`` at (x, params) already computed; its tangent (traced
+    only for derivatives of second order) is that of ``linearise``'s Jacobian."""
+    return J
+
+
+@_jacobian_at.defjvp
+def _jacobian_at_jvp(linearise, primals, tangents):
+    J, x, params = primals
+    _, dx, dparams = tangents
+    return J, jax.jvp(lambda y, p: linearise(y, p)[1], (x, params), (dx, dparams))[1]
 
 
 @_implicit_root.defjvp
 def _implicit_root_jvp(residual, linearise, tol, primals, tangents):
     x0, params = primals
     _, dparams = tangents
-    x, stats, J = _root(linearise, tol, x0, params)
+    x, stats, J = _implicit_root(residual, linearise, tol, x0, params)
     dR = jax.jvp(lambda p: residual(x, p), (params,), (dparams,))[1]
-    dx = -jnp.linalg.solve(J, dR)
-    return (x, stats), (dx, jnp.zeros_like(stats))
+    dx = -jnp.linalg.solve(_jacobian_at(linearise, J, x, params), dR)
+    return (x, stats, J), (dx, jnp.zeros_like(stats), jnp.zeros_like(J))
