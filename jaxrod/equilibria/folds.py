@@ -48,10 +48,10 @@ from jaxrod.stored import StoredProgram
 class Fold(SpecialPoint):
     """A fold of a scene's branch in the input ``vary``, refined by Moore-Spence
     (``SpecialPoint``'s fields), with ``q`` = int theta there and its normal form:
-    ``dF_dvalue``, ``d2F_dq2``, ``normal_form_c``, ``tip_parabola_c`` (module docstring) in
-    the input's units, and the two smallest eigenvalues of the Hessian there
-    (``hessian_smallest``: one is zero; the other's sign tells whether the fold joins a
-    stable branch to an index-1 one).
+    ``dF_dvalue``, ``d2F_dq2``, ``normal_form_c``, ``tip_parabola_c`` (module docstring; NaN
+    where the tip angle does not move along phi, T = 0) in the input's units, and the two
+    smallest eigenvalues of the Hessian there (``hessian_smallest``: one is zero; the
+    other's sign tells whether the fold joins a stable branch to an index-1 one).
     """
 
     q: float
@@ -116,7 +116,7 @@ def refine(scene: Scene | FileScene, b: Branch, n: int = DEFAULT_N) -> list[Fold
             vary=b.vary, value=value,
             tip_angle_deg=math.degrees(float(angle)), tip_position=X, q=float(q),
             dF_dvalue=float(d_v), d2F_dq2=float(d_qq), normal_form_c=c,
-            tip_parabola_c=c / float(slope) ** 2,
+            tip_parabola_c=c / float(slope) ** 2 if slope != 0.0 else math.nan,
             hessian_smallest=(float(eigs[0]), float(eigs[1])),
             state=np.asarray(fp.x[i]), null_vector=phi, converged=conv,
             residual_norm=float(fp.newton.residual_norm[i]),

@@ -18,7 +18,7 @@ from typing import Any, NamedTuple
 import jax
 import jax.numpy as jnp
 
-from jaxrod.derivatives import Autodiff, EnergyModel, as_model
+from jaxrod.derivatives import Autodiff, EnergyModel
 
 
 class DescentResult(NamedTuple):
@@ -39,7 +39,7 @@ def descend(energy: Callable[[jax.Array, Any], jax.Array] | EnergyModel, x0: jax
     them). An accepted point gives the next direction; a rejected one halves t (Armijo
     backtracking).
     """
-    model = as_model(energy) if isinstance(energy, EnergyModel) else Autodiff(
+    model = energy if isinstance(energy, EnergyModel) else Autodiff(
         lambda x, _, a: energy(x, a))
 
     def evaluate(x):

@@ -184,9 +184,9 @@ def implicit_newton(residual: Callable[[jax.Array, Any], jax.Array] | None, x0: 
     where dR/dparams . dparams is one forward-mode pass through ``residual`` at the root
     (give it with ``linearise`` where it is cheaper than the linearisation) and dR/dx is the
     exact Jacobian Newton uses (``jacobian``, or ``linearise`` giving both, as in
-    ``newton``; forward-mode autodiff of ``residual`` when neither is given), the one of
-    Newton's last step (at the root). Newton's
-    iterations are never differentiated and the starting point carries no gradient.
+    ``newton``; forward-mode autodiff of ``residual`` when neither is given), taken from
+    Newton's last step (at the root). Newton's iterations are never differentiated and the
+    starting point carries no gradient.
     ``stats`` = (converged as 0/1, residual norm, iterations) as a float array, with zero
     tangent. Under ``vmap`` each batch element gets its own solve; under ``jacfwd`` the
     tangents share one factorisation of dR/dx.
