@@ -8,8 +8,14 @@ XLA's CPU backend has two code generators for fused kernels; the older one (chos
 runs them as fast or faster. Measured on a 2-core x86_64 CPU with jax 0.10.2, the
 one-program fold pair (``fold_angles``, N = 12): first call 4.1 s -> 2.1 s, warm call
 2.0 ms -> 1.9 ms; 1000 batched fold pairs 268 ms -> 235 ms (benchmarks/compile_time.py and
-benchmarks/throughput.py measure it for every entry point). On other backends the option
-is ignored.
+benchmarks/throughput.py measure it for every entry point). XLA's CPU runtime can also
+deadlock when a kernel inside a program's loops hands work to its multi-threaded Eigen pool
+(jax 0.10.2, 2 cores: the vmapped condition numbers of ``conditioning_near_fold`` hung on
+their second call, idle, every time); ``xla_cpu_multi_thread_eigen = False`` runs those
+kernels on the calling thread. jaxrod's matrices are small (N + 1 <= a few hundred): 1000
+fold pairs run at 3410-3430 per second against 3420-3470 without it and one fold pair in
+3.0-3.1 ms either way; the paper's ``folds`` (N = 16, the diagram and both folds) takes
+20 ms warm against 17 ms. On other backends the options are ignored.
 
 The options are passed to each program's compilation (``jax.jit``'s ``compiler_options``),
 not set process-wide, so a user's own programs are compiled as they would be without
@@ -29,7 +35,7 @@ import jax
 import numpy as np
 
 #: XLA options for jaxrod's programs (module docstring).
-COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
+COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_multi_thread_eigen": False}
 
 
 @functools.cache
