@@ -32,7 +32,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.bistability.fold_curve import CAPACITY, SHIFT, refine, trace_program
+from jaxrod.bistability.fold_curve import CAPACITY, SHIFT, refine, refine_program, trace_program
 from jaxrod.design_point import DesignPoint, check_target, valid_range
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise
@@ -197,6 +197,17 @@ def _start(point: DesignPoint, n: int) -> np.ndarray:
                                      [math.radians(f.value * degrees), 0.0]]) for f in found])
 
 
+def _compile_ahead(point: DesignPoint, vary: str, n: int, runs: int) -> None:
+    """Start compiling the trace of ``runs`` fold curves and the cusp's refinement on a
+    background thread while ``_start`` finds the fold pair (``Program.compile_ahead``)."""
+    args = _Rig.of(point, n).args(point.index(vary))
+    w = jax.ShapeDtypeStruct((2 * args[1].size + 2,), jnp.float64)
+    trace_program.compile_ahead(jax.ShapeDtypeStruct((runs, *w.shape), jnp.float64),
+                                jax.ShapeDtypeStruct((runs,), jnp.float64), args,
+                                CURVE_OPTIONS, CAPACITY)
+    refine_program.compile_ahead(w, args, 0.0, False, True)
+
+
 def _run(point, name, u_lo, u_hi, w0, directions, n, max_cusps):
     """The fold curves from the states w0 in the directions, and the engine's args."""
     args = _Rig.of(point, n).args(point.index(name))
@@ -254,6 +265,7 @@ def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) ->
     i = point.index(vary)
     to = check_target(point, vary, to)
     v0 = point.values[i]
+    _compile_ahead(point, vary, n, 2)
     w0 = _start(point, n)
     u_to = to / v0 - 1.0
     lo, hi = sorted((0.0, u_to))
@@ -351,6 +363,7 @@ def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> CurvePoint:
     # stop short of the magnet touching the rod (the clearance's last 1 %)
     u_lo = max(CUSP_SEARCH[0], (lo / v0 - 1.0) * 0.99 if lo > 0 else CUSP_SEARCH[0])
     u_hi = min(CUSP_SEARCH[1], (hi / v0 - 1.0) * 0.99 if math.isfinite(hi) else CUSP_SEARCH[1])
+    _compile_ahead(point, vary, n, 2)
     w0 = _start(point, n)
     runs, observed, args = _run(point, vary, u_lo, u_hi, w0[[0, 0]], [1.0, -1.0], n, 1.0)
     found = []

@@ -189,7 +189,7 @@ def _identity(scene) -> tuple:
 
 
 def _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n, readout, offset,
-             priors, hold=(), z0=None) -> tuple[_Problem, object]:
+             priors, hold=(), z0=None, ahead: int | None = None) -> tuple[_Problem, object]:
     start, stop = check_range(scene, vary, *vary_range)
     free, hold = tuple(free), tuple(hold)
     if not free and not offset:
@@ -243,7 +243,20 @@ def _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n, readout,
         raise ParameterError("bounds: the scene's values of the free inputs (the start) lie "
                              "outside the bounds")
     n_folds = int(readout[:, 0].max()) + 1
+    disc = discretise(path.template, n)
+    arrays = dict(path=path, disc=disc, origin=start,
+                  span=stop - start, z0=z0, p0=jnp.asarray(p0),
+                  free=jnp.asarray(free_mask), sigma=float(sigma),
+                  which=jnp.asarray(readout[:, 0].astype(np.int32)),
+                  sign=jnp.asarray(readout[:, 1]), prior_mean=jnp.asarray(mean),
+                  prior_scale=jnp.asarray(scale * free_mask), lower=jnp.asarray(lower),
+                  upper=jnp.asarray(upper), magnets=_remembered(
+                      ("magnets", here, keys), lambda: _magnets(scene, keys, p0)))
     if z0 is None:
+        if ahead is not None:  # the fit's program compiles while the folds are found
+            states = jax.ShapeDtypeStruct((n_folds, 2 * disc.size + 1), jnp.float64)
+            _fit_program.compile_ahead(*_fit_arguments(arrays | {"z0": states}, data, mask),
+                                       ahead)
         z0, status = _remembered(("folds", here, vary, start, stop, n, n_folds),
                                  lambda: fold_guesses(scene, vary, start, stop, n_folds, n))
         if len(z0) < n_folds:
@@ -251,28 +264,25 @@ def _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n, readout,
             raise ParameterError(f"the start has {len(z0)} fold(s) along {vary} from "
                                  f"{start:g} to {stop:g}{why}; the data need {n_folds}: "
                                  "start nearer the answer, or widen the range")
-    arrays = dict(path=path, disc=discretise(path.template, n), origin=start,
-                  span=stop - start, z0=jnp.asarray(z0), p0=jnp.asarray(p0),
-                  free=jnp.asarray(free_mask), sigma=float(sigma),
-                  which=jnp.asarray(readout[:, 0].astype(np.int32)),
-                  sign=jnp.asarray(readout[:, 1]), prior_mean=jnp.asarray(mean),
-                  prior_scale=jnp.asarray(scale * free_mask), lower=jnp.asarray(lower),
-                  upper=jnp.asarray(upper), magnets=_remembered(
-                      ("magnets", here, keys), lambda: _magnets(scene, keys, p0)))
+    arrays["z0"] = jnp.asarray(z0)
     names_free = free + ((OFFSET,) if offset else ())
     return _Problem(keys, names_free, arrays, data, mask, int(mask.sum()),
                     sum(1 for k in priors if k in names_free), priors,
                     abs(stop - start)), path
 
 
+def _fit_arguments(a: dict, data, mask) -> tuple:
+    """``_fit_program``'s arguments but ``max_iter``, from a problem's arrays."""
+    return (a["path"], a["disc"], a["origin"], a["span"], a["z0"], a["p0"], a["free"],
+            jnp.asarray(np.nan_to_num(data)), jnp.asarray(mask), a["sigma"], a["which"],
+            a["sign"], a["prior_mean"], a["prior_scale"], a["lower"], a["upper"],
+            a["magnets"])
+
+
 def _solve(problem: _Problem, max_iter: int, design: bool = False):
     """(the record, the fold states at the answer)."""
-    a = problem.arrays
-    res, folds = _fit_program(a["path"], a["disc"], a["origin"], a["span"], a["z0"],
-                                 a["p0"], a["free"], jnp.asarray(np.nan_to_num(problem.data)),
-                                 jnp.asarray(problem.mask), a["sigma"], a["which"], a["sign"],
-                                 a["prior_mean"], a["prior_scale"], a["lower"], a["upper"],
-                                 a["magnets"], max_iter)
+    res, folds = _fit_program(*_fit_arguments(problem.arrays, problem.data, problem.mask),
+                              max_iter)
     return record(problem, res, folds, design), res.aux
 
 
@@ -292,7 +302,7 @@ def fit_folds(scene: Scene | FileScene, vary: str, vary_range: tuple[float, floa
     the start.
     """
     problem, _ = _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n,
-                          readout, offset, priors, hold)
+                          readout, offset, priors, hold, ahead=max_iter)
     return _solve(problem, max_iter, design)[0]
 
 
