@@ -23,10 +23,12 @@ while the first runs (``Program.compile_ahead``): XLA's compilation releases Pyt
 two cores the compilations overlap. The fit of the paper's Young's modulus (the fold
 guesses' branch, then the fit) takes 5.8-6.2 s from a fresh process against 6.5-6.7 s one
 after the other, the cusp (the fold pair, then the fold curves and the cusp's refinement)
-12.0-12.8 s against 13.3-14.3 s, the folds of a scene along the magnet's angle (the branch,
-then the refinement) 4.0-4.1 s against 4.5-4.6 s, measured in one run on 2 cores. A
-program already compiled for those shapes is found in JAX's own cache (nothing is
-compiled twice).
+12.0-12.8 s against 13.3-14.3 s, measured in one run on 2 cores. Only a program sure to
+run is compiled ahead: XLA's compiler itself uses both cores, so a compilation that
+overlaps another slows it. The folds of a scene compiling their refinement while the
+branch is traced took 3.8-3.9 s against 4.2-4.4 s, but 3.6-3.8 s against 2.6 s where the
+branch had no fold to refine; they do not. A program already compiled for those shapes is
+found in JAX's own cache (nothing is compiled twice).
 
 The options are passed to each program's compilation (``jax.jit``'s ``compiler_options``),
 not set process-wide, so a user's own programs are compiled as they would be without

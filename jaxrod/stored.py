@@ -95,12 +95,6 @@ class StoredProgram:
         self._static = static_argnames
         self._loaded: dict[str, tuple] = {}
 
-    def compile_ahead(self, *args, **kwargs) -> None:
-        """``Program.compile_ahead`` where no store is enabled (with one, a later process
-        reads the traced program instead of tracing it)."""
-        if _store[0] is None:
-            self.jitted.compile_ahead(*args, **kwargs)
-
     def __call__(self, *args, **kwargs):
         if _store[0] is None:
             return self.jitted(*args, **kwargs)

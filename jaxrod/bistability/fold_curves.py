@@ -197,15 +197,18 @@ def _start(point: DesignPoint, n: int) -> np.ndarray:
                                      [math.radians(f.value * degrees), 0.0]]) for f in found])
 
 
-def _compile_ahead(point: DesignPoint, vary: str, n: int, runs: int) -> None:
-    """Start compiling the trace of ``runs`` fold curves and the cusp's refinement on a
-    background thread while ``_start`` finds the fold pair (``Program.compile_ahead``)."""
+def _compile_ahead(point: DesignPoint, vary: str, n: int, runs: int, cusp: bool) -> None:
+    """Start compiling the trace of ``runs`` fold curves (and the cusp's refinement:
+    ``cusp``) on a background thread while ``_start`` finds the fold pair
+    (``Program.compile_ahead``). Only programs sure to run: a compilation that overlaps
+    another slows it (XLA's compiler uses both cores)."""
     args = _Rig.of(point, n).args(point.index(vary))
     w = jax.ShapeDtypeStruct((2 * args[1].size + 2,), jnp.float64)
     trace_program.compile_ahead(jax.ShapeDtypeStruct((runs, *w.shape), jnp.float64),
                                 jax.ShapeDtypeStruct((runs,), jnp.float64), args,
                                 CURVE_OPTIONS, CAPACITY)
-    refine_program.compile_ahead(w, args, 0.0, False, True)
+    if cusp:
+        refine_program.compile_ahead(w, args, 0.0, False, True)
 
 
 def _run(point, name, u_lo, u_hi, w0, directions, n, max_cusps):
@@ -265,7 +268,7 @@ def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) ->
     i = point.index(vary)
     to = check_target(point, vary, to)
     v0 = point.values[i]
-    _compile_ahead(point, vary, n, 2)
+    _compile_ahead(point, vary, n, 2, cusp=False)
     w0 = _start(point, n)
     u_to = to / v0 - 1.0
     lo, hi = sorted((0.0, u_to))
@@ -363,7 +366,7 @@ def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> CurvePoint:
     # stop short of the magnet touching the rod (the clearance's last 1 %)
     u_lo = max(CUSP_SEARCH[0], (lo / v0 - 1.0) * 0.99 if lo > 0 else CUSP_SEARCH[0])
     u_hi = min(CUSP_SEARCH[1], (hi / v0 - 1.0) * 0.99 if math.isfinite(hi) else CUSP_SEARCH[1])
-    _compile_ahead(point, vary, n, 2)
+    _compile_ahead(point, vary, n, 2, cusp=True)
     w0 = _start(point, n)
     runs, observed, args = _run(point, vary, u_lo, u_hi, w0[[0, 0]], [1.0, -1.0], n, 1.0)
     found = []

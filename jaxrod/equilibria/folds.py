@@ -171,11 +171,6 @@ def traced_with_folds(scene, vary: str, start: float, stop: float, n: int = DEFA
     detected), traced again with finer steps where folds may hide within a step
     (``folds``)."""
     options = options or branch_options()
-    # the refinement of up to two folds compiles while the branch is traced
-    path = along(scene, (vary,))
-    disc = discretise(path.template, n)
-    _refine.compile_ahead(jax.ShapeDtypeStruct((2, disc.size), jnp.float64),
-                          jax.ShapeDtypeStruct((2,), jnp.float64), path, disc, 0.0, 1.0)
     for _ in range(RETRACES + 1):
         b = trace(scene, vary, start, stop, n, state, options, margins=margins)
         refined = refine(scene, b, n)

@@ -288,9 +288,6 @@ def locate_folds(scene: DipoleMagnet, n: int = DEFAULT_N, branch: Branch | None 
     """
     disc = planar_discretisation(check_degree(n, "N-magnet"), "clamped")
     given = branch is not None
-    if not given:  # the refinement of the two folds compiles while the diagram is traced
-        _refine_batch.compile_ahead(jax.ShapeDtypeStruct((2, disc.size), jnp.float64),
-                                    jax.ShapeDtypeStruct((2,), jnp.float64), scene, disc, tol)
     branch = branch or trace_diagram(scene, n)
     report = _folds_on(scene, disc, branch, n, tol)
     options = default_options()
