@@ -40,6 +40,7 @@ backend, so ``jax.distributed.initialize`` and device-count settings still work 
 
 from __future__ import annotations
 
+import concurrent.futures
 import functools
 import inspect
 from collections.abc import Callable
@@ -110,7 +111,7 @@ class Program:
         self._fn = fn
         self._kwargs = kwargs
         self._jitted = None
-        self._ahead = {}  # compile_ahead's compilations, by the call's abstract key
+        self._ahead = {}  # compile_ahead's compilations under way, by the call's abstract key
         self.nested = jax.jit(fn, **kwargs)
         names = set(kwargs.get("static_argnames", ()) if not isinstance(
             kwargs.get("static_argnames"), str) else (kwargs["static_argnames"],))
@@ -221,16 +222,11 @@ class Program:
             return self.nested(*args, **kwargs)
         args, kwargs = self._strong_inputs(args, kwargs)
         if self._ahead:
-            key = self._abstract_key(args, kwargs)
-            future = self._ahead.get(key)
-            try:
-                compiled = future.result() if future is not None else None
-            except Exception:  # it did not compile ahead: compile as always
-                compiled = self._ahead.pop(key) and None
-            if compiled is not None:
-                return compiled(
-                    *[a for i, a in enumerate(args) if i not in self._static_positions],
-                    **{k: v for k, v in kwargs.items() if k not in self._static_names})
+            future = self._ahead.pop(self._abstract_key(args, kwargs), None)
+            if future is not None:
+                # wait for it: the call below then finds the executable in JAX's cache (a
+                # failure ahead is the call's own to report)
+                concurrent.futures.wait([future])
         return self.jitted(*args, **kwargs)
 
     def __getattr__(self, name):
@@ -242,8 +238,8 @@ class Program:
 @functools.cache
 def _background():
     """The one thread ``compile_ahead`` compiles on (joined before the interpreter exits)."""
-    from concurrent.futures import ThreadPoolExecutor
-    return ThreadPoolExecutor(max_workers=1, thread_name_prefix="jaxrod-compile")
+    return concurrent.futures.ThreadPoolExecutor(max_workers=1,
+                                                 thread_name_prefix="jaxrod-compile")
 
 
 def jit(fn: Callable | None = None, /, **kwargs):
