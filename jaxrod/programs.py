@@ -227,6 +227,8 @@ class Program:
                 # wait for it: the call below then finds the executable in JAX's cache (a
                 # failure ahead is the call's own to report)
                 concurrent.futures.wait([future])
+            # a compilation whose call never came is dropped once done (the plain path again)
+            self._ahead = {k: f for k, f in self._ahead.items() if not f.done()}
         return self.jitted(*args, **kwargs)
 
     def __getattr__(self, name):

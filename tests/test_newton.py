@@ -48,3 +48,24 @@ def test_kept_jacobian_is_the_jacobian_at_the_returned_point():
         assert bool(res.converged)
         assert jnp.allclose(res.jacobian, jax.jacfwd(_circle)(res.x, 2.0), atol=1e-15)
     assert newton(_circle, jnp.array([3.0, 1.0]), 2.0).jacobian is None
+
+
+def _no_root_at_negative_lam(x, lam, args):
+    """E = sum(exp(x) - lam x): grad E = exp(x) - lam has no root for lam <= 0."""
+    return jnp.sum(jnp.exp(x) - lam * x)
+
+
+def test_a_continuation_from_a_start_that_is_no_equilibrium_says_so():
+    """The driver's first pass corrects the start at its lam: where there is nothing to
+    converge to, the run stops with NOT_CONVERGED (one point recorded, its residual
+    large), never a branch that looks traced; from a true start it runs."""
+    from jaxrod.solvers.continuation import ContinuationOptions, pseudo_arclength
+    from jaxrod.status import Status
+
+    opts = ContinuationOptions(lam_min=-2.0, lam_max=2.0, max_points=50)
+    bad = pseudo_arclength(_no_root_at_negative_lam, jnp.zeros(2), -1.0, None, opts)
+    assert Status(int(bad.status)) == Status.NOT_CONVERGED
+    assert int(bad.num_points) == 1 and not float(bad.residual_norm[0]) <= opts.tol
+    good = pseudo_arclength(_no_root_at_negative_lam, jnp.zeros(2), 1.0, None, opts)
+    assert Status(int(good.status)) == Status.REACHED_BOUND
+    assert float(good.residual_norm[0]) <= opts.tol

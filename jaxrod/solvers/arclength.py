@@ -40,8 +40,9 @@ import jax.numpy as jnp
 from jaxrod.solvers.newton import newton
 from jaxrod.status import Status
 
-RUNNING, REACHED_BOUND, CAPACITY_FULL, STEP_TOO_SMALL = (
-    Status.RUNNING, Status.REACHED_BOUND, Status.CAPACITY_FULL, Status.STEP_TOO_SMALL)
+RUNNING, REACHED_BOUND, CAPACITY_FULL, STEP_TOO_SMALL, NOT_CONVERGED = (
+    Status.RUNNING, Status.REACHED_BOUND, Status.CAPACITY_FULL, Status.STEP_TOO_SMALL,
+    Status.NOT_CONVERGED)
 
 
 class StepControl(NamedTuple):
@@ -88,7 +89,9 @@ def arclength_run(system, data, w0, orient, aux0, out0, control: StepControl, op
     empty record. The first pass of the loop is the start itself: the corrector at w0 (a
     converged point needs no step) gives the Jacobian there and the unit tangent t0 with
     <t0, orient> > 0, recorded as point 0; so the program holds one copy of the system's
-    linearisation. Returns (out, num_points, status, rejected_steps)."""
+    linearisation. A start the corrector does not converge at is recorded as it ends and
+    stops the run with ``NOT_CONVERGED``. Returns (out, num_points, status,
+    rejected_steps)."""
 
     def step(s: _State) -> _State:
         first = s.k < 0
@@ -115,6 +118,7 @@ def arclength_run(system, data, w0, orient, aux0, out0, control: StepControl, op
                                      jnp.where(k >= capacity - 1, int(CAPACITY_FULL),
                                                jnp.where(ds < control.ds_min,
                                                          int(STEP_TOO_SMALL), int(RUNNING)))))
+        status = jnp.where(first & ~res.converged, int(NOT_CONVERGED), status)
         aux = jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), aux, s.aux)
         return _State(w, jnp.where(accept, t_new, s.t), aux, ds, k,
                       s.rejected + jnp.where(accept, 0, 1), events, status, out)

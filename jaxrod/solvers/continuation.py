@@ -33,6 +33,7 @@ from jaxrod.derivatives import EnergyModel, as_model
 from jaxrod.programs import jit
 from jaxrod.solvers.arclength import (
     CAPACITY_FULL,
+    NOT_CONVERGED,
     REACHED_BOUND,
     RUNNING,
     STEP_TOO_SMALL,
@@ -44,7 +45,7 @@ from jaxrod.status import Status
 FOLDS_FOUND = Status.FOLDS_FOUND
 #: The messages of a run's codes (``jaxrod.status.Status``).
 STATUS_MESSAGES = {int(c): c.message for c in (RUNNING, REACHED_BOUND, FOLDS_FOUND,
-                                                CAPACITY_FULL, STEP_TOO_SMALL)}
+                                                CAPACITY_FULL, STEP_TOO_SMALL, NOT_CONVERGED)}
 
 #: An ``EnergyModel`` (assembled derivatives) or a plain energy function E(x, lam, args).
 Energy = EnergyModel | Callable[[jax.Array, jax.Array, Any], jax.Array]
