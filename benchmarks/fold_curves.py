@@ -60,7 +60,8 @@ def _jaxrod_pair(n=fc.DEFAULT_N):
     """(first cusp, second cusp) from the two fold_curves runs."""
     up = jr.fold_curves(_point(), "D", 1.5, n=n)
     down = jr.fold_curves(_point(), "D", LOW_END, n=n)
-    return up.cusp, down.cusp, up, down
+    cusp = lambda curves: next(p for c in curves for p in c.cusps)
+    return cusp(up), cusp(down), up, down
 
 
 def _one_curve(max_cusps: int, repeat: int):
@@ -77,7 +78,7 @@ def _one_curve(max_cusps: int, repeat: int):
 
 def jaxrod_timing(repeat: int = 3) -> dict:
     t0 = time.perf_counter()
-    first, second, up, down = _jaxrod_pair()
+    first_cusp, second, up, down = _jaxrod_pair()
     cold = time.perf_counter() - t0
     warm, warm_up = [], []
     for _ in range(repeat):
@@ -89,15 +90,15 @@ def jaxrod_timing(repeat: int = 3) -> dict:
         warm_up.append(t1 - t0)
     # AUTO's route: one curve from the lower fold through the first cusp to the second;
     # and the work of an AUTO run that stops at the first cusp: that curve to the first cusp
-    one, (_, _, cusps, _) = _one_curve(2, repeat)
-    to_cusp, (_, _, first_cusps, _) = _one_curve(1, repeat)
+    one, curve = _one_curve(2, repeat)
+    to_cusp, first = _one_curve(1, repeat)
     return {"first_call_s": cold, "warm_s": min(warm), "warm_to_first_cusp_s": min(warm_up),
             "one_curve_to_first_cusp_s": to_cusp,
-            "one_curve_first_cusp_D": first_cusps[0].value,
-            "one_curve_s": one, "one_curve_cusps_D": [c.value for c in cusps],
-            "cusp_D": first.value,
-            "second_cusp_D": second.value, "second_cusp_alpha_deg": second.alpha_deg,
-            "points": sum(len(c.value) for c in up.curves + down.curves)}
+            "one_curve_first_cusp_D": first.cusps[0].along_value,
+            "one_curve_s": one, "one_curve_cusps_D": [c.along_value for c in curve.cusps],
+            "cusp_D": first_cusp.along_value,
+            "second_cusp_D": second.along_value, "second_cusp_alpha_deg": second.value,
+            "points": sum(len(c.values) for c in up + down)}
 
 
 def convergence(ns, n_ref) -> dict:
@@ -105,15 +106,15 @@ def convergence(ns, n_ref) -> dict:
     rows = []
     for n in ns:
         c1, c2 = _jaxrod_pair(n)[:2]
-        rows.append({"N": n, "cusp_D_error": abs(c1.value - ref[0].value),
-                     "cusp_alpha_error_deg": abs(c1.alpha_deg - ref[0].alpha_deg),
-                     "second_cusp_D_error": abs(c2.value - ref[1].value)})
+        rows.append({"N": n, "cusp_D_error": abs(c1.along_value - ref[0].along_value),
+                     "cusp_alpha_error_deg": abs(c1.value - ref[0].value),
+                     "second_cusp_D_error": abs(c2.along_value - ref[1].along_value)})
         print(f"N = {n}: cusp D error {rows[-1]['cusp_D_error']:.1e}, second cusp "
               f"{rows[-1]['second_cusp_D_error']:.1e}", flush=True)
-    return {"N_ref": n_ref, "reference": {"cusp_D": ref[0].value,
-                                          "cusp_alpha_deg": ref[0].alpha_deg,
-                                          "second_cusp_D": ref[1].value,
-                                          "second_cusp_alpha_deg": ref[1].alpha_deg},
+    return {"N_ref": n_ref, "reference": {"cusp_D": ref[0].along_value,
+                                          "cusp_alpha_deg": ref[0].value,
+                                          "second_cusp_D": ref[1].along_value,
+                                          "second_cusp_alpha_deg": ref[1].value},
             "rows": rows}
 
 
@@ -126,12 +127,12 @@ def conditioning(samples: int = 8) -> list[dict]:
 
     point = _point()
     up = jr.fold_curves(point, "D", 1.5)
-    lower = up.curves[0]
+    lower = up[0]
     # states along the curve: re-run to get them (the FoldCurve keeps observables only)
     w0 = fc._start(point, fc.DEFAULT_N)
     runs, _, args = fc._run(point, "D", 0.0 - 1e-3, 0.3, w0, [1.0, 1.0], fc.DEFAULT_N, 1.0)
     m = args[1].size
-    k = len(lower.value) - 1
+    k = len(lower.values) - 1
     W = np.concatenate([np.full(2 * m, 1.0 / m), [1.0, 1.0]])
     rows = []
     for j in np.unique(np.linspace(0, k - 1, samples).astype(int)):
@@ -156,8 +157,8 @@ def conditioning(samples: int = 8) -> list[dict]:
         ty = np.concatenate([t[:m], t[2 * m:]])
         Wy = np.concatenate([np.full(m, 1.0 / m), [1.0, 1.0]])
         mini = np.vstack([Jm, Wy * ty])
-        rows.append({"D": float(lower.value[j]), "distance_to_cusp": up.cusp.value
-                     - float(lower.value[j]),
+        rows.append({"D": float(lower.along_values[j]), "distance_to_cusp":
+                     lower.cusps[0].along_value - float(lower.along_values[j]),
                      "moore_spence_cond": float(np.linalg.cond(ms)),
                      "minimally_augmented_cond": float(np.linalg.cond(mini))})
     return rows

@@ -217,59 +217,63 @@ def conditioning_figure(studies: dict):
 
 
 def bistable_band(curves, points: int = 400):
-    """(x, lower, upper, bistable) on a common grid of the varied input: both fold curves
-    interpolated where both exist, and where the rod is bistable in the magnet's sweep (both
-    folds in (0, 90] degrees, lower below upper)."""
-    by_start = {c.start: c for c in curves.curves}
-    lo, up = by_start["lower"], by_start["upper"]
-    start = max(lo.value.min(), up.value.min())
-    stop = min(lo.value.max(), up.value.max())
+    """(x, lower, upper, bistable) on a common grid of the varied input: both fold curves of
+    ``fold_curves`` interpolated where both exist, and where the rod is bistable in the
+    magnet's sweep (both folds in (0, 90] degrees, lower below upper)."""
+    lo, up = ({c.name: c for c in curves}[name] for name in ("lower", "upper"))
+    start = max(lo.along_values.min(), up.along_values.min())
+    stop = min(lo.along_values.max(), up.along_values.max())
     if not start < stop:
         x = np.zeros(0)
         return x, x, x, np.zeros(0, bool)
     x = np.linspace(start, stop, points)
-    on = lambda c: np.interp(x, *(a[np.argsort(c.value)] for a in (c.value, c.alpha_deg)))
+    order = lambda c: np.argsort(c.along_values)
+    on = lambda c: np.interp(x, c.along_values[order(c)], c.values[order(c)])
     a_lo, a_up = on(lo), on(up)
     bistable = (a_lo > 0.0) & (a_up <= 90.0) & (a_up > a_lo)
     return x, a_lo, a_up, bistable
 
 
-def fold_curve_figure(curves):
-    """Magnet angle of both folds against the varied input (``FoldCurves``): shaded where
+def fold_curve_figure(curves, point=None):
+    """Magnet angle of both folds against the varied input (``fold_curves``): shaded where
     the rod is bistable in the magnet's sweep (both folds in (0, 90] degrees), the points where
     a fold leaves (0, 90] marked and named, alpha = 90 degrees dotted, and the cusp, called
-    the end of the bistability only where it is (both curves meet there, within 90 degrees)."""
+    the end of the bistability only where it is (both curves meet there, within 90 degrees);
+    the design point they start from (``point``) in the title."""
     fig, ax = plt.subplots(figsize=(7.5, 5))
-    by_start = {c.start: c for c in curves.curves}
-    for start, colour in (("lower", "C0"), ("upper", "C3")):
-        c = by_start[start]
-        label = {"lower": "lower fold (capture)", "upper": "upper fold (release)"}[start]
-        ax.plot(c.value, c.alpha_deg, "-", color=colour, lw=2, label=label)
+    by_name = {c.name: c for c in curves}
+    vary = curves[0].along
+    for name, colour in (("lower", "C0"), ("upper", "C3")):
+        c = by_name[name]
+        label = {"lower": "lower fold (capture)", "upper": "upper fold (release)"}[name]
+        ax.plot(c.along_values, c.values, "-", color=colour, lw=2, label=label)
     x, a_lo, a_up, bistable = bistable_band(curves)
     if bistable.any():
         ax.fill_between(x, a_lo, a_up, where=bistable, color="0.85", zorder=0,
                         label="bistable: both folds in (0, 90] deg")
-    if curves.cusp is not None:
-        c = curves.cusp
-        ends = all(k.reaches_cusp for k in curves.curves) and 0.0 < c.alpha_deg <= 90.0
-        label = (f"cusp: bistability ends at {curves.vary} = {c.value:.8g}" if ends else
-                 f"cusp of a fold curve at {c.alpha_deg:.4g} deg ({curves.vary} = "
-                 f"{c.value:.6g}): " + ("beyond 90 deg, outside the sweep" if c.alpha_deg > 90
-                                        else "not where both folds meet"))
-        ax.plot(c.value, c.alpha_deg, "k*" if ends else "k1", ms=13, label=label)
-    for e in curves.events:
-        ax.plot(e.value, e.alpha_deg, "kx", ms=9,
-                label=f"{e.fold} fold reaches {e.kind[len('alpha = '):]} at "
-                      f"{curves.vary} = {e.value:.6g}")
-    if max(np.max(c.alpha_deg) for c in curves.curves) > 80.0:
+    cusps = [p for c in curves for p in c.cusps]
+    if cusps:
+        c = cusps[0]
+        ends = all(k.reaches_cusp for k in curves) and 0.0 < c.value <= 90.0
+        label = (f"cusp: bistability ends at {vary} = {c.along_value:.8g}" if ends else
+                 f"cusp of a fold curve at {c.value:.4g} deg ({vary} = "
+                 f"{c.along_value:.6g}): " + ("beyond 90 deg, outside the sweep" if c.value > 90
+                                              else "not where both folds meet"))
+        ax.plot(c.along_value, c.value, "k*" if ends else "k1", ms=13, label=label)
+    for e in (p for c in curves for p in c.special_points if p.kind.startswith("alpha")):
+        ax.plot(e.along_value, e.value, "kx", ms=9,
+                label=f"{e.curve} fold reaches {e.kind[len('alpha = '):]} at "
+                      f"{vary} = {e.along_value:.6g}")
+    if max(np.max(c.values) for c in curves) > 80.0:
         ax.axhline(90.0, color="0.5", lw=0.8, ls=":")
     from jaxrod.params import UNITS
 
-    unit = UNITS[curves.vary]
-    ax.set_xlabel(curves.vary + (f" ({unit})" if unit else ""))
+    unit = UNITS[vary]
+    ax.set_xlabel(vary + (f" ({unit})" if unit else ""))
     ax.set_ylabel("magnet angle at the fold, alpha* (deg)")
-    G, M, D = curves.point.groups()
-    ax.set_title(f"folds from G = {G:.4g}, M = {M:.4g}, D = {D:.6g} (N = {curves.n})", fontsize=10)
+    if point is not None:
+        G, M, D = point.groups()
+        ax.set_title(f"folds from G = {G:.4g}, M = {M:.4g}, D = {D:.6g}", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

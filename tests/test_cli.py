@@ -157,16 +157,16 @@ def test_cusp_json(capsys):
     assert main(["cusp", *PAPER_POINT, "--vary", "D", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["vary"] == "D" and out["converged"] is True
-    assert {"D", "alpha_deg", "q", "tip_deg", "cubic_coefficient"} <= set(out["cusp"])
+    assert {"along", "value", "q", "tip_angle_deg", "cubic_coefficient"} <= set(out["cusp"])
     # the fold system's value, against the one-parameter fold pair just before the cusp
     from jaxrod.magnet.diagram import make_scene
     from jaxrod.magnet.folds import locate_folds
 
-    rep = locate_folds(make_scene(2.2, 0.0236, out["cusp"]["D"] - 3e-3))
+    rep = locate_folds(make_scene(2.2, 0.0236, out["cusp"]["along"] - 3e-3))
     low, up = rep.folds
     assert rep.converged and up.alpha_deg - low.alpha_deg < 0.1  # ~ (D_c - D)^(3/2)
-    assert abs(low.alpha_deg - out["cusp"]["alpha_deg"]) < 0.5
-    assert abs(up.alpha_deg - out["cusp"]["alpha_deg"]) < 0.5
+    assert abs(low.alpha_deg - out["cusp"]["value"]) < 0.5
+    assert abs(up.alpha_deg - out["cusp"]["value"]) < 0.5
 
 
 def test_foldcurve_writes_files(tmp_path, capsys):
@@ -178,7 +178,7 @@ def test_foldcurve_writes_files(tmp_path, capsys):
     for name in ("foldcurve.csv", "foldcurve.json", "foldcurve.png"):
         assert (out / name).exists()
     header = (out / "foldcurve.csv").read_text().splitlines()[0]
-    assert header.startswith("curve,D,alpha_deg,q,tip_deg,dF_dalpha,d2F_dq2")
+    assert header.startswith("curve,D,alpha_deg,tip_angle_deg,q,dF_dvalue,d2F_dq2")
 
 
 @pytest.mark.parametrize("argv, name", [

@@ -330,7 +330,7 @@ def test_the_generic_fold_curve_of_the_papers_scene_passes_its_cusp():
     and scaling, started elsewhere; their cusp is checked independently in
     test_fold_curves): its cusp bracket holds their refined cusp, and its points are folds
     of the paper's diagram (locate_folds, the hand-written energy) at their D."""
-    cusp = jr.fold_curves(jr.DesignPoint.from_groups(G, M, D), "D", 1.5, n=N).cusp
+    cusp = jr.fold_curves(jr.DesignPoint.from_groups(G, M, D), "D", 1.5, n=N)[0].cusps[0]
     curve = jr.fold_curve(paper_scene(), "magnet.alpha", (0.0, math.pi / 2), "magnet.D",
                           (D, 1.5), n=N)
     (i,) = curve.cusp_indices
@@ -338,17 +338,17 @@ def test_the_generic_fold_curve_of_the_papers_scene_passes_its_cusp():
     # cusp lies on the short arc between the two points around the sign change of F_qq: the
     # nearer of them is within the two points' extent in D and in alpha of it (D and alpha are
     # both stationary at the cusp, so that it need not lie within their range of either)
-    assert curve.along_values.max() <= cusp.value + 1e-12
+    assert curve.along_values.max() <= cusp.along_value + 1e-12
     bracket = np.stack([curve.along_values[i:i + 2], np.degrees(curve.values[i:i + 2])])
     extent = np.abs(bracket[:, 1] - bracket[:, 0])
-    distance = np.abs(bracket - np.array([[cusp.value], [cusp.alpha_deg]]))
+    distance = np.abs(bracket - np.array([[cusp.along_value], [cusp.value]]))
     nearer = np.argmin(np.sum(distance / extent[:, None], axis=0))
     assert np.all(distance[:, nearer] <= extent)
     # refined, the generic cusp is the design point's (one regular cusp system on two paths,
     # each Newton to a residual of 1e-13: measured 3e-15 in D, 1e-13 deg)
     (refined,) = curve.cusps
-    assert refined.converged and abs(refined.along_value - cusp.value) <= 1e-11
-    assert abs(math.degrees(refined.value) - cusp.alpha_deg) <= 1e-9
+    assert refined.converged and abs(refined.along_value - cusp.along_value) <= 1e-11
+    assert abs(math.degrees(refined.value) - cusp.value) <= 1e-9
     assert refined.cubic_coefficient == pytest.approx(cusp.cubic_coefficient, rel=1e-8)
     for j in (0, i // 2, (i + len(curve.values)) // 2):  # both folds, away from the cusp
         at = jr.folds(jr.magnet_scene(G, M, float(curve.along_values[j])), n=N).folds

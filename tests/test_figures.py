@@ -78,7 +78,8 @@ def test_stability_diagram_figure(tmp_path):
 def test_fold_curve_figure(tmp_path):
     point = jr.DesignPoint.from_groups(*PAPER)
     curves = jr.fold_curves(point, "D", 1.5, n=12)
-    check_figure(jr.fold_curve_figure(curves), tmp_path, "foldcurve", ("G = 2.2", "M = 0.0236"))
+    check_figure(jr.fold_curve_figure(curves, point), tmp_path, "foldcurve",
+                 ("G = 2.2", "M = 0.0236"))
 
 
 def test_design_map_figure(tmp_path):
@@ -111,15 +112,15 @@ def test_fold_curve_figure_shades_only_the_sweeps_bistability(tmp_path):
     bistability. (The last release shaded up to 103.6 degrees and labelled that "cusp".)"""
     point = jr.DesignPoint.from_groups(4.4, 0.0472, 1.2228)
     curves = jr.fold_curves(point, "D", 1.01, n=12)
-    exit_90 = [e for e in curves.events if e.kind == "alpha = 90 deg"]
-    assert len(exit_90) == 1 and exit_90[0].fold == "upper"
+    exit_90 = [e for c in curves for e in c.special_points if e.kind == "alpha = 90 deg"]
+    assert len(exit_90) == 1 and exit_90[0].curve == "upper"
     fig = jr.fold_curve_figure(curves)
     ax = fig.axes[0]
     shaded = [c for c in ax.collections if len(c.get_paths())]
     ys = np.concatenate([p.vertices[:, 1] for c in shaded for p in c.get_paths()])
     xs = np.concatenate([p.vertices[:, 0] for c in shaded for p in c.get_paths()])
     assert ys.max() <= 90.0 + 1e-9 and ys.min() > 0.0
-    assert xs.min() >= exit_90[0].value - 1e-3
+    assert xs.min() >= exit_90[0].along_value - 1e-3
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert any("upper fold reaches 90 deg" in t for t in labels)
     assert not any("bistability ends" in t for t in labels)

@@ -40,10 +40,10 @@ def cusps():
 def _extrapolated_cusp(point, vary, cusp):
     """(value, alpha_deg, q) of the cusp from fold pairs on the bistable side."""
     v0 = point.values[point.index(vary)]
-    side = math.copysign(1.0, v0 - cusp.value)
+    side = math.copysign(1.0, v0 - cusp.along_value)
     rows = []
-    for h in np.geomspace(1e-3, 1e-2, 9) * cusp.value:
-        G, M, D = point.replace(vary, cusp.value + side * h).groups()
+    for h in np.geomspace(1e-3, 1e-2, 9) * cusp.along_value:
+        G, M, D = point.replace(vary, cusp.along_value + side * h).groups()
         rep = locate_folds(DipoleMagnet(G, M, D, 0.0))
         assert rep.converged and [f.kind for f in rep.folds] == ["lower", "upper"]
         low, up = rep.folds
@@ -52,7 +52,7 @@ def _extrapolated_cusp(point, vary, cusp):
     h, dq2, alpha, q = np.array(rows).T
     roots = np.roots(np.polyfit(h, dq2, 6))
     root = roots[np.argmin(np.abs(roots))].real
-    return (cusp.value + root, np.polyval(np.polyfit(h, alpha, 6), root),
+    return (cusp.along_value + root, np.polyval(np.polyfit(h, alpha, 6), root),
             np.polyval(np.polyfit(h, q, 6), root))
 
 
@@ -63,8 +63,8 @@ def test_cusp_agrees_with_merging_fold_pairs(cusps, E, vary):
     assert cusp.kind == "cusp" and cusp.converged
     assert abs(cusp.d2F_dq2) < 1e-9 and abs(cusp.hessian_smallest[0]) < 1e-9
     value, alpha, q = _extrapolated_cusp(point, vary, cusp)
-    assert abs(value - cusp.value) < 1e-10 * max(1.0, abs(cusp.value))
-    assert abs(alpha - cusp.alpha_deg) < 1e-9
+    assert abs(value - cusp.along_value) < 1e-10 * max(1.0, abs(cusp.along_value))
+    assert abs(alpha - cusp.value) < 1e-9
     assert abs(q - cusp.q) < 1e-10
 
 
@@ -72,14 +72,15 @@ def test_cubic_coefficient_from_equilibria_at_the_cusp(cusps):
     """alpha - alpha_c = -F_qqq / (6 F_alpha) (q - q_c)^3 + O(dq^4) on the equilibria at the
     cusp's parameter; the mean of dq = +-h cancels the quartic term."""
     point, cusp = cusps[200, "D"]
-    G, M, D = point.replace("D", cusp.value).groups()
+    G, M, D = point.replace("D", cusp.along_value).groups()
     scene = DipoleMagnet(G, M, D, 0.0)
     disc = planar_discretisation(fc.DEFAULT_N, "clamped")
     m = disc.size
-    theta_c, phi = cusp.state[:m], cusp.state[m:2 * m]
+    theta_c, phi = cusp.w[:m], cusp.w[m:2 * m]
     phi = phi / float(disc.mean(jnp.asarray(phi)))
-    alpha_c = math.radians(cusp.alpha_deg)
-    c3 = -cusp.cubic_coefficient / (6.0 * cusp.dF_dalpha)
+    alpha_c = math.radians(cusp.value)
+    # dF_dvalue is per degree of the magnet angle: F_alpha per radian is 180 / pi times it
+    c3 = -cusp.cubic_coefficient / (6.0 * math.degrees(cusp.dF_dvalue))
     estimates = []
     for h in (0.02, 0.01):
         ratios = []
@@ -100,13 +101,13 @@ def test_cusp_location_derivatives_match_finite_differences(cusps):
     values = jnp.asarray(point.values)
     (d_value, d_alpha, _), = [jax.jacfwd(location)(values)]
     value, alpha, stats = location(values)
-    assert float(stats[0]) == 1.0 and abs(float(value) - cusp.value) < 1e-12
+    assert float(stats[0]) == 1.0 and abs(float(value) - cusp.along_value) < 1e-12
     for i, name in ((0, "G"), (1, "M")):
         h = 1e-5 * point.values[i]
         plus = fc.find_cusp(point.replace(name, point.values[i] + h), "D")
         minus = fc.find_cusp(point.replace(name, point.values[i] - h), "D")
-        fd_value = (plus.value - minus.value) / (2 * h)
-        fd_alpha = math.radians(plus.alpha_deg - minus.alpha_deg) / (2 * h)
+        fd_value = (plus.along_value - minus.along_value) / (2 * h)
+        fd_alpha = math.radians(plus.value - minus.value) / (2 * h)
         assert abs(float(d_value[i]) - fd_value) < 1e-6 * abs(fd_value)
         assert abs(float(d_alpha[i]) - fd_alpha) < 1e-6 * max(abs(fd_alpha), 1.0)
     assert abs(float(d_value[2])) < 1e-12  # the varied input's own start has no effect
@@ -115,13 +116,14 @@ def test_cusp_location_derivatives_match_finite_differences(cusps):
 def test_fold_curve_points_are_folds_of_locate_folds():
     point = fc.DesignPoint.from_groups(*CASES[200], D_EXP)
     curves = fc.fold_curves(point, "G", 5.0)
-    assert curves.converged and curves.cusp is None
-    for curve in curves.curves:
-        assert curve.value[-1] == pytest.approx(5.0, abs=1e-12)
-        for j in (len(curve.value) // 3, len(curve.value) - 1):
-            rep = locate_folds(DipoleMagnet(curve.value[j], CASES[200][1], D_EXP, 0.0))
-            fold = {f.kind: f for f in rep.folds}[curve.start]
-            assert abs(fold.alpha_deg - curve.alpha_deg[j]) < 1e-9
+    assert all(c.converged and not c.cusps for c in curves)
+    for curve in curves:
+        assert [p.kind for p in curve.special_points] == ["end"]
+        assert curve.along_values[-1] == pytest.approx(5.0, abs=1e-12)
+        for j in (len(curve.values) // 3, len(curve.values) - 1):
+            rep = locate_folds(DipoleMagnet(curve.along_values[j], CASES[200][1], D_EXP, 0.0))
+            fold = {f.kind: f for f in rep.folds}[curve.name]
+            assert abs(fold.alpha_deg - curve.values[j]) < 1e-9
             assert abs(fold.q - curve.q[j]) < 1e-10
 
 
@@ -141,8 +143,8 @@ def test_fold_curve_follows_round_the_cusp_back_to_the_other_fold():
     assert u.max() > 0.06 and u[-1] < 0  # went past the cusp (D = 1.3064) and came back
     assert np.sum(np.diff(np.sign(np.diff(u))) != 0) == 1  # one turning point in D
     j = k - 2  # the last point with u >= 0: refine to u = 0 exactly
-    end = fc._refine("u", np.asarray(run.w[j]), 0.0, args, "D", D_EXP, "end")
-    assert end.converged and abs(end.alpha_deg - folds[1].alpha_deg) < 1e-9
+    end = fc.special_point("u", np.asarray(run.w[j]), args, 0.0, fc._scales(point, "D"))
+    assert end.converged and abs(end.value - folds[1].alpha_deg) < 1e-9
     assert abs(end.q - folds[1].q) < 1e-10
     assert np.asarray(run.w[j, 2 * m]) > np.asarray(run.w[0, 2 * m])
 
@@ -156,8 +158,8 @@ def test_physical_input_cusp_matches_group_cusp():
     by_radius = fc.find_cusp(point, "track-radius")
     G, M, D = point.groups()
     by_D = fc.find_cusp(fc.DesignPoint.from_groups(G, M, D), "D")
-    assert abs(by_radius.value / rod.length - by_D.value) < 1e-11
-    assert abs(by_radius.alpha_deg - by_D.alpha_deg) < 1e-9
+    assert abs(by_radius.along_value / rod.length - by_D.along_value) < 1e-11
+    assert abs(by_radius.value - by_D.value) < 1e-9
 
 
 def test_bad_inputs_are_refused():

@@ -328,8 +328,9 @@ def fold_crossings(spec, data, rows: int = 12) -> list[dict]:
                 curves = fold_curves(start, spec.x.name, end)
             except ParameterError:
                 continue
-            out += [{spec.y.name: float(data["y"][iy]), spec.x.name: e.value}
-                    for e in curves.events if e.kind == "alpha = 90 deg" and e.converged]
+            out += [{spec.y.name: float(data["y"][iy]), spec.x.name: e.along_value}
+                    for c in curves for e in c.special_points
+                    if e.kind == "alpha = 90 deg" and e.converged]
     return out
 
 
@@ -351,6 +352,6 @@ def cusp_curve(spec, data, rows: int = 12) -> list[dict]:
         except ParameterError:
             continue
         if cusp.converged:
-            out.append({spec.y.name: float(data["y"][iy]), spec.x.name: cusp.value,
-                        "alpha_deg": cusp.alpha_deg})
+            out.append({spec.y.name: float(data["y"][iy]), spec.x.name: cusp.along_value,
+                        "alpha_deg": cusp.value})
     return out

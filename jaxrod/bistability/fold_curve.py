@@ -141,10 +141,14 @@ class FoldCurvePoint:
     """A special point of a fold curve, refined by Newton on the Moore-Spence system with
     one equation added (``jaxrod.solvers.fold_curve.event_solve``, in (x, phi, v, u)):
     ``kind`` "cusp" where F_qq = D^3E[phi, phi, phi] = 0, "end" where the curve leaves the
-    range of ``vary`` or of ``along``. ``along_value``, ``value``: the two inputs there; the
-    state, the tip angle (degrees), the cubic coefficient F_qqq of a cusp's normal form
-    F = F_v (v - v_c) + F_qu (u - u_c) q + F_qqq q^3 / 6 (phi scaled to mean(phi) = 1; NaN
-    at an end), and Newton's report."""
+    range of ``vary`` or of ``along``, or an event of the curve (the paper's "alpha = 90
+    deg"). ``along_value``, ``value``: the two inputs there; ``curve``: the name of the
+    curve it lies on; the state x, the solver's unknowns ``w`` = (x, phi, lam, u), the tip
+    angle (degrees), q = mean(x), the fold's coefficients F_v = dF/d``value`` and F_qq
+    (phi scaled to mean(phi) = 1), the Hessian's two smallest eigenvalues (one is zero at
+    the fold), the cubic coefficient F_qqq of a cusp's normal form
+    F = F_v (v - v_c) + F_qu (u - u_c) q + F_qqq q^3 / 6 (NaN elsewhere), and Newton's
+    report."""
 
     kind: str
     along_value: float
@@ -156,24 +160,40 @@ class FoldCurvePoint:
     residual_norm: float
     iterations: int
     status: Status
+    q: float = np.nan
+    dF_dvalue: float = np.nan
+    d2F_dq2: float = np.nan
+    hessian_smallest: tuple[float, float] = (np.nan, np.nan)
+    w: np.ndarray | None = None
+    curve: str = ""
 
     def as_dict(self) -> dict:
-        cubic = self.cubic_coefficient
-        return {"kind": self.kind, "along": self.along_value, "value": self.value,
-                "tip_angle_deg": self.tip_angle_deg,
-                "cubic_coefficient": cubic if np.isfinite(cubic) else None,
+        finite = lambda v: float(v) if np.isfinite(v) else None
+        return {"kind": self.kind, "curve": self.curve, "along": self.along_value,
+                "value": self.value, "tip_angle_deg": self.tip_angle_deg, "q": finite(self.q),
+                "dF_dvalue": finite(self.dF_dvalue), "d2F_dq2": finite(self.d2F_dq2),
+                "hessian_smallest_eigenvalues": [finite(e) for e in self.hessian_smallest],
+                "cubic_coefficient": finite(self.cubic_coefficient),
                 "converged": self.converged, "residual_norm": self.residual_norm,
                 "iterations": self.iterations}
 
 
+#: A fold curve's columns beside ``along_values`` and ``values`` (``FoldCurve.columns``).
+COLUMNS = ("tip_angle_deg", "q", "dF_dvalue", "d2F_dq2", "newton_iterations",
+           "residual_norm")
+
+
 @dataclasses.dataclass(frozen=True)
 class FoldCurve:
-    """Points of a fold curve (both directions from the starting fold, joined in order of
-    ``along``), with the cusp test F_qq / |phi|^3 at each and its special points (the cusps
-    passed, and each end refined onto the range it leaves).
+    """Points of a fold curve in order of the run, with what each records and its special
+    points (the cusps passed, each end refined onto the range it leaves, events).
 
     ``along_values``: the second input; ``values``: ``vary`` at the fold; ``tip_angle_deg``:
-    the tip at the fold; ``status``: why each direction ended.
+    the tip at the fold; q = mean(x), ``dF_dvalue`` and ``d2F_dq2`` the fold's coefficients
+    (phi scaled to mean(phi) = 1: F_qq changes sign at a cusp), ``hessian_smallest`` (k, 2)
+    the Hessian's two smallest eigenvalues, Newton's iterations and residual at each point;
+    ``cusp_test``: F_qq / |phi|^3; ``status``: why each direction ended; ``start``: the fold
+    it starts from; ``name``: which curve it is (the paper's "lower", "upper").
     """
 
     vary: str
@@ -183,8 +203,15 @@ class FoldCurve:
     tip_angle_deg: np.ndarray
     cusp_test: np.ndarray
     status: tuple[Status, ...]
-    start: Fold
+    start: Fold | None
     special_points: tuple[FoldCurvePoint, ...] = ()
+    q: np.ndarray | None = None
+    dF_dvalue: np.ndarray | None = None
+    d2F_dq2: np.ndarray | None = None
+    hessian_smallest: np.ndarray | None = None
+    newton_iterations: np.ndarray | None = None
+    residual_norm: np.ndarray | None = None
+    name: str = ""
 
     @property
     def cusps(self) -> tuple[FoldCurvePoint, ...]:
@@ -195,6 +222,37 @@ class FoldCurve:
         """i such that a cusp lies between points i and i + 1 (F_qq changes sign)."""
         c = self.cusp_test
         return np.nonzero(np.sign(c[:-1]) * np.sign(c[1:]) < 0)[0]
+
+    @property
+    def reaches_cusp(self) -> bool:
+        return bool(self.cusps)
+
+    @property
+    def overall(self) -> Status:
+        """The first direction that failed, else NOT_CONVERGED where a special point did
+        not converge, else SUCCESS."""
+        failed = [s for s in self.status if not s.ok]
+        return failed[0] if failed else (Status.SUCCESS if all(
+            p.converged for p in self.special_points) else Status.NOT_CONVERGED)
+
+    @property
+    def converged(self) -> bool:
+        return self.overall == Status.SUCCESS
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The curve's points as named columns (along, value, ``COLUMNS``, eig0, eig1)."""
+        cols = {self.along: self.along_values, self.vary: self.values}
+        cols |= {k: getattr(self, k) for k in COLUMNS if getattr(self, k) is not None}
+        if self.hessian_smallest is not None:
+            cols |= {"eig0": self.hessian_smallest[:, 0], "eig1": self.hessian_smallest[:, 1]}
+        return cols
+
+    def as_dict(self) -> dict:
+        return {"vary": self.vary, "along": self.along, "name": self.name,
+                **{k: np.asarray(v).tolist() for k, v in self.columns().items()},
+                "special_points": [p.as_dict() for p in self.special_points],
+                "status": [s.name.lower() for s in self.status],
+                "overall": self.overall.name.lower(), "converged": self.converged}
 
     def plot(self, ax=None):
         """``vary`` at the fold against ``along``; cusps marked."""
@@ -210,16 +268,32 @@ class FoldCurve:
         return ax
 
 
-def _special_point(kind, w, args, target, scales) -> FoldCurvePoint:
+def special_point(kind, w, args, target, scales, label=None, curve="") -> FoldCurvePoint:
     """The point near w where ``kind`` ("cusp", "lam", "u") reaches ``target``, in the
-    inputs' units (scales = (origin, span, origin2, span2))."""
-    res, (u, lam, _, angle, *_), cubic = refine(kind, w, args, target)
+    inputs' units: scales = (origin, span, origin2, span2) with value = origin + span lam and
+    along = origin2 + span2 u; ``label`` its kind (default "cusp" or "end")."""
+    res, (u, lam, q, angle, d_lam, d_qq, eigs), cubic = refine(kind, w, args, target)
     origin, span, origin2, span2 = scales
     conv = bool(res.converged)
-    return FoldCurvePoint("cusp" if kind == "cusp" else "end", origin2 + span2 * float(u),
-                          origin + span * float(lam), float(np.degrees(angle)), float(cubic),
-                          np.asarray(res.x)[:args[1].size], conv, float(res.residual_norm),
-                          int(res.iterations), Status.of(conv))
+    return FoldCurvePoint(
+        label or ("cusp" if kind == "cusp" else "end"), origin2 + span2 * float(u),
+        origin + span * float(lam), float(np.degrees(angle)), float(cubic),
+        np.asarray(res.x)[:args[1].size], conv, float(res.residual_norm), int(res.iterations),
+        Status.of(conv), q=float(q), dF_dvalue=float(d_lam) / span, d2F_dq2=float(d_qq),
+        hessian_smallest=(float(eigs[0]), float(eigs[1])), w=np.asarray(res.x), curve=curve)
+
+
+def run_columns(runs, observed, i: int, k: int, scales) -> dict:
+    """The first k points of run i of ``trace_program`` as ``FoldCurve``'s fields (the
+    inputs' units, ``special_point``'s scales) and the states ``w``."""
+    origin, span, origin2, span2 = scales
+    u, lam, q, angle, d_lam, d_qq, eigs = (np.asarray(o[i][:k]) for o in observed)
+    return {"along_values": origin2 + span2 * u, "values": origin + span * lam,
+            "tip_angle_deg": np.degrees(angle), "cusp_test": np.asarray(runs.cusp_test[i][:k]),
+            "q": q, "dF_dvalue": d_lam / span, "d2F_dq2": d_qq, "hessian_smallest": eigs,
+            "newton_iterations": np.asarray(runs.newton_iterations[i][:k]),
+            "residual_norm": np.asarray(runs.residual_norm[i][:k]),
+            "w": np.asarray(runs.w[i][:k])}
 
 
 def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float], along: str,
@@ -261,31 +335,29 @@ def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, flo
     parts, status, ends = [], [], []
     for i, rev in ((0, True), (1, False)):
         k = int(runs.num_points[i])
-        cols = [origin2 + span2 * observed[0][i, :k], origin + span * observed[1][i, :k],
-                np.degrees(observed[3][i, :k]), runs.cusp_test[i, :k], runs.w[i, :k]]
+        cols = run_columns(runs, observed, i, k, scales)
         lam, u = runs.w[i, k - 1, 2 * m], runs.w[i, k - 1, 2 * m + 1]
         if int(runs.status[i]) == Status.REACHED_BOUND:  # its last point is just outside
             kind = "lam" if not 0.0 <= lam <= 1.0 else "u"
             target = float(np.clip(lam if kind == "lam" else u, 0.0, 1.0))
-            end = _special_point(kind, runs.w[i, k - 1], args, target, scales)
+            end = special_point(kind, runs.w[i, k - 1], args, target, scales)
             other = (end.along_value - origin2) / span2 if kind == "lam" else \
                 (end.value - origin) / span  # the other input, scaled: inside [0, 1]
             if not -1e-9 <= other <= 1.0 + 1e-9:
                 end = dataclasses.replace(end, converged=False, status=Status.NOT_CONVERGED)
             ends.append(end)
             if end.converged:  # the curve ends on the range exactly
-                for c, v in zip(cols, (end.along_value, end.value, end.tip_angle_deg)):
-                    c[-1] = v
-        cols = [c[::-1] if rev else c for c in cols]
-        parts.append([c[:-1] if rev else c for c in cols])  # the start point once
+                cols = with_point(cols, end, replace_last=True)
+        # the start point once
+        parts.append({c: v[::-1][:-1] if rev else v for c, v in cols.items()})
         status.append(Status(int(runs.status[i])))
-    cat = [np.concatenate([p[j] for p in parts]) for j in range(5)]
-    curve = FoldCurve(vary=vary, along=along, along_values=cat[0], values=cat[1],
-                      tip_angle_deg=cat[2], cusp_test=cat[3], status=tuple(status), start=f)
+    cat = {c: np.concatenate([p[c] for p in parts]) for c in parts[0]}
+    w = cat.pop("w")
+    curve = FoldCurve(vary=vary, along=along, status=tuple(status), start=f, **cat)
     cusps = []
     for j in curve.cusp_indices:  # each from the bracket's point with the smaller |F_qq|
         pick = j if abs(curve.cusp_test[j]) <= abs(curve.cusp_test[j + 1]) else j + 1
-        c = _special_point("cusp", cat[4][pick], args, 0.0, scales)
+        c = special_point("cusp", w[pick], args, 0.0, scales)
         # converged, and in its bracket (widened by the bracket's width on each side)
         a_lo, a_hi = sorted((float(curve.along_values[j]), float(curve.along_values[j + 1])))
         width = max(a_hi - a_lo, 1e-12 * span2)
@@ -295,4 +367,17 @@ def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, flo
     return dataclasses.replace(curve, special_points=tuple(cusps + ends))
 
 
-__all__ = ["FoldCurve", "FoldCurvePoint", "Shift", "fold_curve", "refine", "trace_program"]
+def with_point(cols: dict, point: FoldCurvePoint, replace_last: bool) -> dict:
+    """``run_columns``' columns with the refined ``point`` as their last row (replacing the
+    last, or appended); the cusp test is zero at a cusp, kept at an end."""
+    row = {"along_values": point.along_value, "values": point.value,
+           "tip_angle_deg": point.tip_angle_deg, "q": point.q, "dF_dvalue": point.dF_dvalue,
+           "d2F_dq2": point.d2F_dq2, "hessian_smallest": point.hessian_smallest,
+           "newton_iterations": point.iterations, "residual_norm": point.residual_norm,
+           "w": point.w, "cusp_test": 0.0 if point.kind == "cusp" else cols["cusp_test"][-1]}
+    keep = slice(None, -1) if replace_last else slice(None)
+    return {c: np.concatenate([v[keep], np.asarray([row[c]], v.dtype)]) for c, v in cols.items()}
+
+
+__all__ = ["FoldCurve", "FoldCurvePoint", "Shift", "fold_curve", "refine", "run_columns",
+           "special_point", "trace_program", "with_point"]

@@ -32,7 +32,17 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.bistability.fold_curve import CAPACITY, SHIFT, refine, refine_program, trace_program
+from jaxrod.bistability.fold_curve import (
+    CAPACITY,
+    SHIFT,
+    FoldCurve,
+    FoldCurvePoint,
+    refine_program,
+    run_columns,
+    special_point,
+    trace_program,
+    with_point,
+)
 from jaxrod.design_point import DesignPoint, check_target, valid_range
 from jaxrod.discretise.planar import planar_discretisation
 from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise
@@ -70,90 +80,15 @@ class _Rig:
                 values * (jnp.arange(values.size) == i))
 
 
-@dataclasses.dataclass(frozen=True)
-class CurvePoint:
-    """A refined point of a fold curve: the cusp, or where a fold reaches alpha = 0 or 90."""
-
-    kind: str  # "cusp", "alpha = 90 deg", "alpha = 0 deg"
-    vary: str
-    value: float
-    alpha_deg: float
-    q: float
-    tip_deg: float
-    dF_dalpha: float
-    d2F_dq2: float
-    cubic_coefficient: float  # F_qqq of the cusp's normal form (NaN at any other point)
-    hessian_smallest: tuple[float, float]
-    converged: bool
-    residual_norm: float
-    iterations: int
-    state: np.ndarray  # (theta, phi, alpha, u), u relative to the starting point's value
-    fold: str = ""  # the fold curve it lies on ("lower" or "upper"; "" for a cusp)
-
-    def as_dict(self) -> dict:
-        return {self.vary: self.value, "fold": self.fold, "alpha_deg": self.alpha_deg,
-                "q": self.q,
-                "tip_deg": self.tip_deg, "dF_dalpha": self.dF_dalpha, "d2F_dq2": self.d2F_dq2,
-                "cubic_coefficient": (self.cubic_coefficient
-                                      if math.isfinite(self.cubic_coefficient) else None),
-                "hessian_smallest_eigenvalues": list(self.hessian_smallest),
-                "converged": self.converged, "residual_norm": self.residual_norm,
-                "iterations": self.iterations}
+#: The fold curves' ``vary``: the magnet angle at the fold, in degrees.
+ALPHA = "alpha_deg"
 
 
-@dataclasses.dataclass(frozen=True)
-class FoldCurve:
-    """One traced fold curve (host arrays, valid points only), cut at its first cusp."""
-
-    start: str  # "lower" or "upper": the fold it starts from
-    value: np.ndarray  # the varied input along the curve
-    alpha_deg: np.ndarray
-    q: np.ndarray
-    tip_deg: np.ndarray
-    dF_dalpha: np.ndarray
-    d2F_dq2: np.ndarray
-    hessian_smallest: np.ndarray  # (n, 2)
-    newton_iterations: np.ndarray
-    residual_norm: np.ndarray
-    status: Status
-    reaches_cusp: bool
-
-    def columns(self) -> dict[str, np.ndarray]:
-        return {"value": self.value, "alpha_deg": self.alpha_deg, "q": self.q,
-                "tip_deg": self.tip_deg, "dF_dalpha": self.dF_dalpha, "d2F_dq2": self.d2F_dq2,
-                "eig0": self.hessian_smallest[:, 0], "eig1": self.hessian_smallest[:, 1],
-                "newton_iterations": self.newton_iterations,
-                "residual_norm": self.residual_norm}
-
-
-@dataclasses.dataclass(frozen=True)
-class FoldCurves:
-    """Both fold curves from a design point, the cusp (if one lies in the range) and where a
-    fold leaves alpha in (0, 90] degrees."""
-
-    point: DesignPoint
-    vary: str
-    to: float
-    n: int
-    curves: list[FoldCurve]
-    cusp: CurvePoint | None
-    events: list[CurvePoint]
-
-    @property
-    def converged(self) -> bool:
-        good = all(c.status in (Status.REACHED_BOUND, Status.CUSP_PASSED) for c in self.curves)
-        return good and (self.cusp is None or self.cusp.converged) and all(
-            e.converged for e in self.events)
-
-    def as_dict(self) -> dict:
-        return {"vary": self.vary, "to": self.to, "n": self.n, "point": self.point.as_dict(),
-                "cusp": None if self.cusp is None else self.cusp.as_dict(),
-                "events": [e.kind for e in self.events],
-                "event_points": [e.as_dict() for e in self.events],
-                "curves": {c.start: {k: v.tolist() for k, v in c.columns().items()}
-                           | {"status": str(c.status), "reaches_cusp": c.reaches_cusp}
-                           for c in self.curves},
-                "converged": self.converged}
+def _scales(point: DesignPoint, vary: str) -> tuple[float, float, float, float]:
+    """``special_point``'s scales of a design point's runs: alpha in degrees from lam (the
+    angle in radians) and the input as v0 (1 + u)."""
+    v0 = point.values[point.index(vary)]
+    return 0.0, 180.0 / math.pi, v0, v0
 
 
 #: Fold-curve step control: u is the relative change of the varied input; alpha is bounded
@@ -220,54 +155,43 @@ def _run(point, name, u_lo, u_hi, w0, directions, n, max_cusps):
     return runs, observed, args
 
 
-def _refine(kind, w, target, args, name, v0, label) -> CurvePoint:
-    res, rep, cubic = refine(kind, w, args, target)
-    u, alpha, q, tip, d_alpha, d_qq, eigs = rep
-    return CurvePoint(kind=label, vary=name, value=float(v0 * (1.0 + u)),
-                      alpha_deg=math.degrees(float(alpha)), q=float(q),
-                      tip_deg=math.degrees(float(tip)), dF_dalpha=float(d_alpha),
-                      d2F_dq2=float(d_qq), cubic_coefficient=float(cubic),
-                      hessian_smallest=(float(eigs[0]), float(eigs[1])),
-                      converged=bool(res.converged), residual_norm=float(res.residual_norm),
-                      iterations=int(res.iterations), state=np.asarray(res.x))
-
-
 def _sign_changes(values):
     s = np.sign(values)
     return np.nonzero(s[:-1] * s[1:] < 0)[0]
 
 
-def _curve_from(run, observed, i, start, v0) -> tuple[FoldCurve, int | None]:
-    k = int(run.num_points[i])
-    u, alpha, q, tip, d_alpha, d_qq, eigs = (np.asarray(o[i][:k]) for o in observed)
-    change = _sign_changes(run.cusp_test[i][:k])
+def _nearest_change(test) -> int | None:
+    """The point of the first sign change of ``test`` with the smaller |test| (None)."""
+    change = _sign_changes(test)
+    if not change.size:
+        return None
+    j = int(change[0])
+    return j if abs(test[j]) < abs(test[j + 1]) else j + 1
+
+
+def _columns(runs, observed, i, scales) -> tuple[dict, int | None]:
+    """Run i's columns (``run_columns``), cut at its first cusp, and the point nearest it."""
+    k = int(runs.num_points[i])
+    cols = run_columns(runs, observed, i, k, scales)
+    change = _sign_changes(cols["cusp_test"])
     cut = int(change[0]) + 1 if change.size else k
-    curve = FoldCurve(
-        start=start, value=v0 * (1.0 + u[:cut]), alpha_deg=np.degrees(alpha[:cut]),
-        q=q[:cut], tip_deg=np.degrees(tip[:cut]), dF_dalpha=d_alpha[:cut],
-        d2F_dq2=d_qq[:cut], hessian_smallest=eigs[:cut],
-        newton_iterations=np.asarray(run.newton_iterations[i][:cut]),
-        residual_norm=np.asarray(run.residual_norm[i][:cut]),
-        status=Status(int(run.status[i])), reaches_cusp=bool(change.size))
-    near = None
-    if change.size:
-        j = int(change[0])
-        t = run.cusp_test[i]
-        near = j if abs(t[j]) < abs(t[j + 1]) else j + 1
-    return curve, near
+    return {c: v[:cut] for c, v in cols.items()}, _nearest_change(cols["cusp_test"])
 
 
-def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) -> FoldCurves:
-    """Both fold curves of ``point`` as the input ``vary`` goes to ``to``, the cusp where they
-    meet (if it lies in the range) and where a fold leaves alpha in (0, 90] degrees.
+def fold_curves(point: DesignPoint, vary: str, to: float,
+                n: int = DEFAULT_N) -> tuple[FoldCurve, FoldCurve]:
+    """Both fold curves of ``point`` (``name`` "lower", "upper") as the input ``vary`` goes
+    to ``to``: the magnet angle at the fold (``ALPHA``, degrees) against ``vary``, each with
+    its special points: the cusp where they meet (if it lies in the range: each curve ends
+    there), where a fold leaves alpha in (0, 90] degrees ("alpha = 90 deg", "alpha = 0
+    deg"), and the end at ``to``.
 
     Along a curve: grad E = 0, H phi = 0, l . phi = 1 in (theta, phi, alpha, u) with
     pseudo-arclength in (alpha, u). Paper: the folds of Proposition ``thm:planar_fold``
     followed in a second parameter; the design rule of section ``s.discussion``.
     """
-    i = point.index(vary)
     to = check_target(point, vary, to)
-    v0 = point.values[i]
+    v0 = point.values[point.index(vary)]
     _compile_ahead(point, vary, n, 2, cusp=False)
     w0 = _start(point, n)
     u_to = to / v0 - 1.0
@@ -277,58 +201,47 @@ def fold_curves(point: DesignPoint, vary: str, to: float, n: int = DEFAULT_N) ->
     margin = 1e-3 * abs(u_to)
     runs, observed, args = _run(point, vary, lo - margin, hi + margin, w0,
                                 [direction, direction], n, 1.0)
-    curves, cusp, events = [], None, []
-    for i_run, start in enumerate(("lower", "upper")):
-        curve, near = _curve_from(runs, observed, i_run, start, v0)
+    scales, cusp, out = _scales(point, vary), None, []
+    for i_run, name in enumerate(("lower", "upper")):
+        cols, near = _columns(runs, observed, i_run, scales)
         if near is not None and cusp is None:
-            cusp = _refine("cusp", runs.w[i_run][near], 0.0, args, vary, v0, "cusp")
-        events += [dataclasses.replace(e, fold=start) for e in _alpha_events(
-            runs, observed, i_run, args, vary, v0, len(curve.value))]
-        if curve.reaches_cusp:
-            curve = _with_end(curve, cusp)
-        elif abs(curve.value[-1] - v0) > abs(to - v0):  # passed `to`: end exactly there
-            k = len(curve.value) - 1
-            end = _refine("u", runs.w[i_run][k], u_to, args, vary, v0, "end")
-            curve = _with_end(dataclasses.replace(curve, **{
-                f.name: getattr(curve, f.name)[:-1] for f in dataclasses.fields(curve)
-                if isinstance(getattr(curve, f.name), np.ndarray)}), end)
-        curves.append(curve)
-    return FoldCurves(point=point, vary=vary, to=to, n=n, curves=curves, cusp=cusp,
-                      events=events)
+            cusp = special_point("cusp", runs.w[i_run][near], args, 0.0, scales)
+        special = _alpha_events(runs, observed, i_run, args, scales, len(cols["values"]),
+                                name)
+        if near is not None:
+            cols = with_point(cols, cusp, replace_last=False)
+            special.insert(0, cusp)
+        elif abs(cols["along_values"][-1] - v0) > abs(to - v0):  # passed `to`: end there
+            end = special_point("u", cols["w"][-1], args, u_to, scales, curve=name)
+            cols = with_point(cols, end, replace_last=True)
+            special.append(end)
+        del cols["w"]
+        out.append(FoldCurve(vary=ALPHA, along=vary, start=None, name=name,
+                             status=(Status(int(runs.status[i_run])),),
+                             special_points=tuple(special), **cols))
+    return tuple(out)
 
 
-def _with_end(curve: FoldCurve, end: CurvePoint) -> FoldCurve:
-    """The curve with the refined point ``end`` (the cusp, or the end value) appended."""
-    add = lambda a, v: np.concatenate([a, np.atleast_1d(np.asarray(v, a.dtype))], axis=0)
-    return dataclasses.replace(
-        curve, value=add(curve.value, end.value), alpha_deg=add(curve.alpha_deg, end.alpha_deg),
-        q=add(curve.q, end.q), tip_deg=add(curve.tip_deg, end.tip_deg),
-        dF_dalpha=add(curve.dF_dalpha, end.dF_dalpha), d2F_dq2=add(curve.d2F_dq2, end.d2F_dq2),
-        hessian_smallest=add(curve.hessian_smallest, [end.hessian_smallest]),
-        newton_iterations=add(curve.newton_iterations, end.iterations),
-        residual_norm=add(curve.residual_norm, end.residual_norm))
-
-
-def _alpha_events(runs, observed, i, args, vary, v0, k) -> list[CurvePoint]:
+def _alpha_events(runs, observed, i, args, scales, k, name) -> list[FoldCurvePoint]:
     alpha = np.asarray(observed[1][i][:k])
     events = []
     for target, label in ((math.pi / 2, "alpha = 90 deg"), (0.0, "alpha = 0 deg")):
         for j in _sign_changes(alpha - target):
             near = j if abs(alpha[j] - target) < abs(alpha[j + 1] - target) else j + 1
-            events.append(_refine("lam", runs.w[i][near], target, args, vary, v0, label))
+            events.append(special_point("lam", runs.w[i][near], args, target, scales, label,
+                                        name))
     return events
 
 
 def trace_fold_curve(point: DesignPoint, vary: str, between: tuple[float, float],
                      direction: float = 1.0, start: str = "lower", max_cusps: int = 2,
-                     n: int = DEFAULT_N):
+                     n: int = DEFAULT_N) -> FoldCurve:
     """One fold curve followed round its cusps: from the ``start`` fold of ``point``, with
     ``vary`` first moving in ``direction`` (+1 or -1), through up to ``max_cusps`` cusps (at
     each the curve turns back in ``vary`` and continues as the other fold), while ``vary``
-    stays ``between`` the two values given. Returns (the values of ``vary`` along the run,
-    alpha* in degrees, the refined cusps in the order passed, the run's status message)."""
-    i = point.index(vary)
-    v0 = point.values[i]
+    stays ``between`` the two values given; the refined cusps are its special points, in
+    the order passed."""
+    v0 = point.values[point.index(vary)]
     lo, hi = sorted(check_target(point, vary, b) for b in between)
     if not lo < v0 < hi:
         raise ParameterError(f"between: {vary} = {v0!r} must lie inside ({lo!r}, {hi!r})")
@@ -336,32 +249,31 @@ def trace_fold_curve(point: DesignPoint, vary: str, between: tuple[float, float]
     runs, observed, args = _run(
         point, vary, lo / v0 - 1.0, hi / v0 - 1.0, w0[[0 if start == "lower" else 1]],
         [math.copysign(1.0, direction)], n, float(max_cusps))
-    k = int(runs.num_points[0])
-    test = np.asarray(runs.cusp_test[0][:k])
-    cusps = []
-    for j in _sign_changes(test):
-        near = j if abs(test[j]) < abs(test[j + 1]) else j + 1
-        cusps.append(_refine("cusp", runs.w[0][near], 0.0, args, vary, v0, "cusp"))
-    u, alpha = np.asarray(observed[0][0][:k]), np.asarray(observed[1][0][:k])
-    return v0 * (1.0 + u), np.degrees(alpha), cusps, Status(int(runs.status[0]))
+    scales = _scales(point, vary)
+    cols = run_columns(runs, observed, 0, int(runs.num_points[0]), scales)
+    test, w = cols["cusp_test"], cols.pop("w")
+    cusps = tuple(special_point("cusp", w[j if abs(test[j]) < abs(test[j + 1]) else j + 1],
+                                args, 0.0, scales) for j in _sign_changes(test))
+    return FoldCurve(vary=ALPHA, along=vary, start=None, name=start,
+                     status=(Status(int(runs.status[0])),), special_points=cusps, **cols)
 
 
 #: How far ``find_cusp`` looks: the varied input within a factor 20 of its start.
 CUSP_SEARCH = (-0.95, 19.0)
 
 
-def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> CurvePoint:
+def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> FoldCurvePoint:
     """The cusp reached from ``point`` by varying ``vary``: the lower fold is followed both
     ways (within the valid range and a factor 20 of the start) to the nearest sign change of
-    d2F/dq2, refined by Newton on the cusp system. Raises ``ParameterError`` if there is no
-    fold to start from, and returns ``converged=False`` (with kind "none") if no cusp is
-    found in the search range.
+    d2F/dq2, refined by Newton on the cusp system (``along_value``: ``vary`` there,
+    ``value``: the magnet angle in degrees). Raises ``ParameterError`` if there is no fold to
+    start from, and returns ``converged=False`` (with kind "none") if no cusp is found in
+    the search range.
 
     The cusp solves the fold system with d2F/dq2 = 0 (the non-degeneracy condition of
     Proposition ``thm:planar_fold`` in the paper fails there).
     """
-    i = point.index(vary)
-    v0 = point.values[i]
+    v0 = point.values[point.index(vary)]
     lo, hi = valid_range(point, vary)
     # stop short of the magnet touching the rod (the clearance's last 1 %)
     u_lo = max(CUSP_SEARCH[0], (lo / v0 - 1.0) * 0.99 if lo > 0 else CUSP_SEARCH[0])
@@ -369,20 +281,20 @@ def find_cusp(point: DesignPoint, vary: str, n: int = DEFAULT_N) -> CurvePoint:
     _compile_ahead(point, vary, n, 2, cusp=True)
     w0 = _start(point, n)
     runs, observed, args = _run(point, vary, u_lo, u_hi, w0[[0, 0]], [1.0, -1.0], n, 1.0)
-    found = []
+    scales, found = _scales(point, vary), []
     for i_run in (0, 1):
-        curve, near = _curve_from(runs, observed, i_run, "lower", v0)
+        cols, near = _columns(runs, observed, i_run, scales)
         if near is not None:
-            found.append((np.sum(np.abs(np.diff(curve.value))), i_run, near))
+            found.append((np.sum(np.abs(np.diff(cols["along_values"]))), i_run, near))
     if not found:
-        return CurvePoint("none", vary, math.nan, math.nan, math.nan, math.nan, math.nan,
-                          math.nan, math.nan, (math.nan, math.nan), False, math.nan, 0,
-                          np.full(2 * planar_discretisation(n).size + 2, np.nan))
+        nan = math.nan
+        return FoldCurvePoint("none", nan, nan, nan, nan, np.full(args[1].size, nan), False,
+                              nan, 0, Status.NOT_CONVERGED)
     _, i_run, near = min(found)
-    return _refine("cusp", runs.w[i_run][near], 0.0, args, vary, v0, "cusp")
+    return special_point("cusp", runs.w[i_run][near], args, 0.0, scales)
 
 
-def cusp_location(point: DesignPoint, vary: str, cusp: CurvePoint, n: int = DEFAULT_N):
+def cusp_location(point: DesignPoint, vary: str, cusp: FoldCurvePoint, n: int = DEFAULT_N):
     """The cusp as a differentiable function of the design point's values:
     ``f(values) -> (value of vary, alpha in radians, Newton stats)``, by implicit
     differentiation of the cusp system about the converged ``cusp`` found from ``point``
@@ -395,7 +307,7 @@ def cusp_location(point: DesignPoint, vary: str, cusp: CurvePoint, n: int = DEFA
     i = point.index(vary)
     rig = _Rig.of(point, n)
     m = rig.disc.size
-    w_start = jnp.asarray(cusp.state)
+    w_start = jnp.asarray(cusp.w)
     factors = rig.values / np.asarray(point.values)
 
     def location(values):

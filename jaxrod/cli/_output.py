@@ -48,21 +48,22 @@ def _not_converged(command: str, why: str) -> None:
     print(f"jaxrod {command}: not converged: {why}", file=sys.stderr)
 
 
-def _write_fold_curves(curves, out_dir: Path) -> None:
+def _write_fold_curves(curves, point, summary: dict, out_dir: Path) -> None:
+    """foldcurve.csv (a row per point of each curve), foldcurve.json and foldcurve.png."""
     from jaxrod.plotting import fold_curve_figure
 
     with open(out_dir / "foldcurve.csv", "w") as fh:
-        columns = list(curves.curves[0].columns())
-        fh.write("curve," + ",".join(curves.vary if k == "value" else k for k in columns) + "\n")
-        for c in curves.curves:
+        columns = list(curves[0].columns())
+        fh.write("curve," + ",".join(columns) + "\n")
+        for c in curves:
             cols = c.columns()
-            for i in range(len(c.value)):
-                fh.write(c.start + "," + ",".join(f"{cols[k][i]:.12g}" for k in columns) + "\n")
-    (out_dir / "foldcurve.json").write_text(json.dumps(curves.as_dict(), indent=1))
-    fold_curve_figure(curves).savefig(out_dir / "foldcurve.png", dpi=120)
+            for i in range(len(c.values)):
+                fh.write(c.name + "," + ",".join(f"{cols[k][i]:.12g}" for k in columns) + "\n")
+    (out_dir / "foldcurve.json").write_text(json.dumps(summary, indent=1))
+    fold_curve_figure(curves, point).savefig(out_dir / "foldcurve.png", dpi=120)
 
 
-def _fmt_cusp(c) -> str:
-    return (f"cusp: {c.vary} = {c.value:.12g}  alpha* = {c.alpha_deg:.10f} deg  "
-            f"q* = {c.q:.10f}  tip* = {c.tip_deg:.10f} deg  d3F/dq3 = {c.cubic_coefficient:.8g}"
-            f"  dF/dalpha = {c.dF_dalpha:.6g}")
+def _fmt_cusp(c, vary: str) -> str:
+    return (f"cusp: {vary} = {c.along_value:.12g}  alpha* = {c.value:.10f} deg  "
+            f"q* = {c.q:.10f}  tip* = {c.tip_angle_deg:.10f} deg  "
+            f"d3F/dq3 = {c.cubic_coefficient:.8g}  dF/dalpha = {c.dF_dvalue:.6g} per deg")

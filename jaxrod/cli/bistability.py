@@ -41,7 +41,7 @@ def cmd_cusp(args) -> int:
     else:
         G, M, D = point.groups()
         print(_header({"G": G, "M": M, "D": D, "inputs": inputs}) + f", varying {args.vary}")
-        print(_fmt_cusp(cusp) if found else out["message"])
+        print(_fmt_cusp(cusp, args.vary) if found else out["message"])
         if found:
             print(f"converged: {cusp.converged} (residual {cusp.residual_norm:.2g}, "
                   f"{cusp.iterations} Newton iterations)")
@@ -60,29 +60,38 @@ def cmd_foldcurve(args) -> int:
     point.index(args.vary)
     out_dir = _output_dir(args.out) if args.out else None
     curves = fold_curves(point, args.vary, args.to, n=args.n)
-    summary = curves.as_dict() | {"inputs": inputs}
+    cusps = [p for c in curves for p in c.cusps]
+    converged = all(c.converged for c in curves)
+    summary = {"vary": args.vary, "to": args.to, "n": args.n, "point": point.as_dict(),
+               "inputs": inputs, "cusp": cusps[0].as_dict() if cusps else None,
+               "curves": {c.name: c.as_dict() for c in curves}, "converged": converged}
     if out_dir is not None:
-        _write_fold_curves(curves, out_dir)
+        _write_fold_curves(curves, point, summary, out_dir)
     if args.json:
         print(json.dumps({k: v for k, v in summary.items() if k != "curves"}
-                         | {"points": {c.start: len(c.value) for c in curves.curves}}))
+                         | {"special_points": [p.as_dict() for c in curves
+                                               for p in c.special_points],
+                            "points": {c.name: len(c.values) for c in curves}}))
     else:
         G, M, D = point.groups()
         print(_header({"G": G, "M": M, "D": D, "inputs": inputs})
               + f", {args.vary} -> {args.to:g}")
-        for c in curves.curves:
-            print(f"{c.start} fold: {len(c.value)} points, {args.vary} from {c.value[0]:.8g} "
-                  f"to {c.value[-1]:.8g}, alpha* from {c.alpha_deg[0]:.6f} to "
-                  f"{c.alpha_deg[-1]:.6f} deg ({c.status})")
-        print(_fmt_cusp(curves.cusp) if curves.cusp is not None else
+        for c in curves:
+            print(f"{c.name} fold: {len(c.values)} points, {args.vary} from "
+                  f"{c.along_values[0]:.8g} to {c.along_values[-1]:.8g}, alpha* from "
+                  f"{c.values[0]:.6f} to {c.values[-1]:.6f} deg ({c.status[0]})")
+        print(_fmt_cusp(cusps[0], args.vary) if cusps else
               f"no cusp between {args.vary} = {point.values[point.index(args.vary)]:.8g} and "
               f"{args.to:g}: bistable throughout")
-        for e in curves.events:
-            print(f"the {e.fold} fold reaches {e.kind} at {args.vary} = {e.value:.10g}")
+        for c in curves:
+            for e in c.special_points:
+                if e.kind.startswith("alpha"):
+                    print(f"the {e.curve} fold reaches {e.kind} at {args.vary} = "
+                          f"{e.along_value:.10g}")
         if out_dir is not None:
             print(f"wrote {out_dir / 'foldcurve.csv'}, foldcurve.json, foldcurve.png")
-        print(f"converged: {curves.converged}")
-    return 0 if curves.converged else 1
+        print(f"converged: {converged}")
+    return 0 if converged else 1
 
 
 def _start_processes(args) -> None:

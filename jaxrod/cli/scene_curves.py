@@ -46,10 +46,7 @@ def foldcurve_on_file(args) -> int:
     special = [{**c.as_dict(), "along": c.along_value / a_factor, "value": c.value / factor}
                for c in curve.special_points]
     cusps = [c for c in special if c["kind"] == "cusp"]
-    failed = [s for s in curve.status if not s.ok]
-    status = failed[0] if failed else (
-        Status.SUCCESS if all(c.converged for c in curve.special_points)
-        else Status.NOT_CONVERGED)
+    status = curve.overall
     out = {"vary": args.vary, "along": args.along,
            "along_values": (curve.along_values / a_factor).tolist(),
            "values": (curve.values / factor).tolist(),
