@@ -125,10 +125,14 @@ def run(release: str, repeats: int) -> dict:
                     row[label + " error"] = next(g["error"] for g in got if "error" in g)
             rows.append(row)
             print(json.dumps(row), flush=True)
-        throughput = {}
-        for label, path in trees.items():
-            r = child(f"jr.fold_pairs({PAIRS})", path, warm_runs=15)
-            throughput[label] = None if "error" in r else 1000.0 / r["warm_s"]
+        # the trees alternating, ``repeats`` fresh processes each: the best warm time of each
+        best = {label: float("inf") for label in trees}
+        for _ in range(repeats):
+            for label, path in trees.items():
+                r = child(f"jr.fold_pairs({PAIRS})", path, warm_runs=15)
+                best[label] = min(best[label], r.get("warm_s", float("inf")))
+        throughput = {label: 1000.0 / t if t < float("inf") else None
+                      for label, t in best.items()}
         print(json.dumps({"fold pairs per s": throughput}), flush=True)
         cli = {}
         argv = ["-m", "jaxrod.cli", "folds", "--G", "2.2", "--M", "0.0236", "--D",
@@ -160,7 +164,8 @@ def markdown(res: dict, machine: str) -> str:
         lines.append(f"| {r['entry']} | {fmt(cn)} | {fmt(co)} | {ratio} | {fmt(wn)} | "
                      f"{fmt(wo)} |")
     tp = res["fold_pairs_per_s"]
-    lines += ["", f"Fold pairs per second, the paper's scene at K = 1000 (warm, best of 15): "
+    lines += ["", f"Fold pairs per second, the paper's scene at K = 1000 (warm, best of 15 "
+              f"calls in each of {res['repeats']} fresh processes, the trees alternating): "
               f"{tp[new]:.4g} ({new}) against {tp[old]:.4g} ({old}), ratio "
               f"{tp[new] / tp[old]:.3f}.", "",
               "| command line (`jaxrod folds`, one process) | " + new + " | " + old + " |",
