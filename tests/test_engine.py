@@ -275,6 +275,26 @@ def test_a_new_term_runs_through_branch_folds_fold_curve_and_map():
     assert abs(fmap.first[0, 1] - direct) <= 1e-10
 
 
+def test_a_fold_curve_starts_from_a_fold_of_a_branch():
+    """Codimension two from a special point: the curve from the branch's first fold (no
+    branch traced again) is the curve from the first fold that ``folds`` finds; a fold at
+    another N, or in another input, is refused by name."""
+    scene, span = paper_scene(), (0.0, math.pi / 2)
+    b = jr.branch(scene, "magnet.alpha", *span, n=N)
+    fold = next(p for p in b.special_points if p.kind == "fold")
+    given = jr.fold_curve(scene, "magnet.alpha", span, "magnet.D", (D, 1.25), n=N, start=fold)
+    found = jr.fold_curve(scene, "magnet.alpha", span, "magnet.D", (D, 1.25), n=N)
+    assert given.converged and abs(given.start.value - found.start.value) <= 1e-12
+    np.testing.assert_allclose(given.values, found.values, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(given.along_values, found.along_values, rtol=0, atol=1e-11)
+    other_n = jr.folds(scene, "magnet.alpha", *span, n=N + 2)[0]
+    with pytest.raises(jr.ParameterError, match="start: .* same n"):
+        jr.fold_curve(scene, "magnet.alpha", span, "magnet.D", (D, 1.25), n=N, start=other_n)
+    with pytest.raises(jr.ParameterError, match="start: a fold in magnet.alpha"):
+        jr.fold_curve(scene, "magnet.D", (1.1, 1.3), "gravity.G", (2.0, 2.5), n=N,
+                      start=fold)
+
+
 def test_the_equilibrium_is_the_one_reached_by_ramping_the_loads():
     at_zero = jr.equilibrium(paper_scene(), n=N)
     assert at_zero.status is Status.SUCCESS and abs(at_zero.tip_angle_deg) <= 1e-12

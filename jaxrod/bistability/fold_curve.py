@@ -298,14 +298,16 @@ def run_columns(runs, observed, i: int, k: int, scales) -> dict:
 
 def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float], along: str,
                along_range: tuple[float, float], which: int = 0, n: int = DEFAULT_N,
-               ds_max: float = 0.02) -> FoldCurve:
+               ds_max: float = 0.02, start: Fold | None = None) -> FoldCurve:
     """The fold curve through the ``which``-th fold met along ``vary`` (over ``vary_range``,
-    at the scene's value of ``along``), followed in ``along`` over ``along_range``.
+    at the scene's value of ``along``), followed in ``along`` over ``along_range``; or from
+    ``start``, a fold of the scene's branch in ``vary`` at degree ``n`` (a special point of
+    ``jaxrod.branch``, or one of ``jaxrod.folds``: the branch is not traced again).
 
     Solves R(x, phi, v; u) = [grad E; H phi; l . phi - 1] = 0 along the curve (paper: the
     fold curves of section "Fold curves and the cusp", for any scene).
     """
-    start, stop = check_range(scene, vary, *vary_range)
+    lo_hi = check_range(scene, vary, *vary_range)
     a0, a1 = check_range(scene, along, *along_range)
     if along == vary:
         raise ParameterError(f"along must differ from vary ({vary})")
@@ -314,15 +316,17 @@ def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, flo
     if not min(a0, a1) <= u_now <= max(a0, a1):
         raise ParameterError(f"the scene's {along} = {u_now:g} is outside along_range "
                              f"[{min(a0, a1):g}, {max(a0, a1):g}]")
-    found = folds(scene, vary, start, stop, n)
-    if len(found) <= which:
-        raise ParameterError(f"the branch in {vary} from {start:g} to {stop:g} has "
-                             f"{len(found)} fold(s); which = {which} asks for fold "
-                             f"{which + 1}")
-    f = found[which]
     disc = discretise(path.template, n)
-    lo, hi = min(start, stop), max(start, stop)
-    origin, span = lo, hi - lo
+    if start is None:
+        found = folds(scene, vary, lo_hi[0], lo_hi[1], n)
+        if len(found) <= which:
+            raise ParameterError(f"the branch in {vary} from {lo_hi[0]:g} to {lo_hi[1]:g} has "
+                                 f"{len(found)} fold(s); which = {which} asks for fold "
+                                 f"{which + 1}")
+        f = found[which]
+    else:
+        f = _checked_start(start, vary, disc.size, lo_hi)
+    origin, span = min(lo_hi), abs(lo_hi[1] - lo_hi[0])
     origin2, span2 = min(a0, a1), abs(a1 - a0)
     args = (path, disc, origin, span, jnp.array([origin2]), jnp.array([span2]))
     w0 = jnp.concatenate([jnp.asarray(f.state), jnp.asarray(f.null_vector),
@@ -365,6 +369,25 @@ def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, flo
             c = dataclasses.replace(c, converged=False, status=Status.NOT_CONVERGED)
         cusps.append(c)
     return dataclasses.replace(curve, special_points=tuple(cusps + ends))
+
+
+def _checked_start(fold, vary: str, size: int, vary_range) -> Fold:
+    """A given starting fold: a converged fold in ``vary``, inside its range, whose state
+    has the discretisation's size (the same N)."""
+    if not isinstance(fold, Fold):
+        raise ParameterError(f"start: a fold (jaxrod.folds, or a branch's special point of "
+                             f"kind 'fold'), got {type(fold).__name__}")
+    if fold.vary != vary:
+        raise ParameterError(f"start: a fold in {fold.vary}, not in vary = {vary}")
+    if not fold.converged:
+        raise ParameterError("start: the fold's refinement did not converge")
+    if np.size(fold.state) != size:
+        raise ParameterError(f"start: the fold's state has {np.size(fold.state)} unknowns, "
+                             f"the curve's N gives {size} (compute both at the same n)")
+    if not min(vary_range) <= fold.value <= max(vary_range):
+        raise ParameterError(f"start: the fold's {vary} = {fold.value:g} lies outside "
+                             f"vary_range")
+    return fold
 
 
 def with_point(cols: dict, point: FoldCurvePoint, replace_last: bool) -> dict:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -66,4 +67,4 @@ def _write_fold_curves(curves, point, summary: dict, out_dir: Path) -> None:
 def _fmt_cusp(c, vary: str) -> str:
     return (f"cusp: {vary} = {c.along_value:.12g}  alpha* = {c.value:.10f} deg  "
             f"q* = {c.q:.10f}  tip* = {c.tip_angle_deg:.10f} deg  "
-            f"d3F/dq3 = {c.cubic_coefficient:.8g}  dF/dalpha = {c.dF_dvalue:.6g} per deg")
+            f"d3F/dq3 = {c.cubic_coefficient:.8g}  dF/dalpha = {math.degrees(c.dF_dvalue):.6g}")
