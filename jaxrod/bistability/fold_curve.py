@@ -362,10 +362,11 @@ def fold_curve(scene: Scene | FileScene, vary: str, vary_range: tuple[float, flo
     for j in curve.cusp_indices:  # each from the bracket's point with the smaller |F_qq|
         pick = j if abs(curve.cusp_test[j]) <= abs(curve.cusp_test[j + 1]) else j + 1
         c = special_point("cusp", w[pick], args, 0.0, scales)
-        # converged, and in its bracket (widened by the bracket's width on each side)
-        a_lo, a_hi = sorted((float(curve.along_values[j]), float(curve.along_values[j + 1])))
-        width = max(a_hi - a_lo, 1e-12 * span2)
-        if not a_lo - width <= c.along_value <= a_hi + width:
+        # converged, and within its bracket's step of the nearer of its two points, in the
+        # solver's unknowns (both inputs are stationary at a cusp: the curve turns back in
+        # each, so the cusp may lie beyond the bracket's range of either)
+        step = np.linalg.norm(w[j + 1] - w[j])
+        if not min(np.linalg.norm(c.w - w[j]), np.linalg.norm(c.w - w[j + 1])) <= step:
             c = dataclasses.replace(c, converged=False, status=Status.NOT_CONVERGED)
         cusps.append(c)
     return dataclasses.replace(curve, special_points=tuple(cusps + ends))
