@@ -73,6 +73,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "equilibrium": ("jaxrod.equilibria.equilibrium", "equilibrium"),
         "branch": ("jaxrod.equilibria.branch", "branch"),
         "folds": ("jaxrod.magnet.folds", "folds"),
+        "fold_function": ("jaxrod.equilibria.folds", "fold_function"),
         "sweep": ("jaxrod.magnet.sweep", "sweep"),
         "branch_points": ("jaxrod.equilibria.branch_points", "branch_points"),
         "bifurcated_branch": ("jaxrod.equilibria.branch_points", "bifurcated_branch"),

@@ -35,11 +35,12 @@ from jaxrod.equilibria.equilibrium import (
 )
 from jaxrod.equilibria.record import Branch, SpecialPoint, checked
 from jaxrod.equilibria.trace import branch_options, check_range, path_of, trace
-from jaxrod.programs import padded
+from jaxrod.params import ParameterError
+from jaxrod.programs import jit, padded
 from jaxrod.scenes.files import FileScene
 from jaxrod.scenes.path import ALONG, along
 from jaxrod.scenes.scene import Scene
-from jaxrod.solvers.folds import fold_coefficients, moore_spence_solve
+from jaxrod.solvers.folds import differentiable_fold, fold_coefficients, moore_spence_solve
 from jaxrod.status import SolverError, Status
 from jaxrod.stored import StoredProgram
 
@@ -232,3 +233,52 @@ def fold_guesses(scene: Scene | FileScene, vary: str, start: float, stop: float,
     status = Status(int(run.status)) if run.residual_norm[0] <= opts.tol and ramp.ok \
         else Status.NOT_CONVERGED
     return (z if status.ok else z[:0]), status
+
+
+def fold_values(path, disc, origin, span, p, z):
+    """The folds' values at the path's inputs p (after ``vary``) from fold states z
+    (K, 2m + 1) = (x, phi, lam) at nearby inputs: (values, new states, each solve
+    converged); implicitly differentiable in p (``differentiable_fold``)."""
+    m = disc.size
+    z_new, stats = jax.vmap(lambda zi: differentiable_fold(
+        MODEL, zi[:m], zi[-1], zi[m:2 * m], (path, disc, origin, span, p)))(z)
+    return origin + span * z_new[:, -1], z_new, jnp.all(stats[:, 0] == 1.0)
+
+
+_fold_values_program = jit(fold_values)
+
+
+def fold_function(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float],
+                  inputs, count: int = 2, n: int = DEFAULT_N):
+    """The first ``count`` folds met along ``vary`` over ``vary_range`` as a differentiable
+    function of the scene's ``inputs`` (keys; a rig's numbers too, such as
+    ``rod.youngs_modulus``): returns ``(f, p0)``, p0 the scene's values of the inputs and
+    ``f(p) -> (the folds' values of vary, converged)``.
+
+    Each call solves the Moore-Spence system [grad E; H phi; l . phi - 1] = 0 at p by
+    Newton from the folds at p0 (found once, on the branch: ``fold_guesses``); the values
+    are implicitly differentiable (d lam / dp = -(dR/dz)^-1 dR/dp at the solution), so
+    ``jax.grad``, ``jax.jacfwd`` and ``jax.vmap`` apply; one compiled program for every
+    function of a scene's structure and N. ``converged`` is False where Newton did not reach
+    a fold from p0's (p too far from p0: take steps). The generic form of the paper's
+    ``fold_angles``."""
+    start, stop = check_range(scene, vary, *vary_range)
+    inputs = tuple(inputs)
+    if not inputs or vary in inputs or len(set(inputs)) != len(inputs):
+        raise ParameterError(f"inputs: one or more distinct inputs other than vary ({vary}), "
+                             f"got {inputs}")
+    path = along(scene, (vary, *inputs))
+    z0, status = fold_guesses(scene, vary, start, stop, count, n)
+    if len(z0) < count:
+        why = "" if status.ok else f" (the branch stopped: {status})"
+        raise ParameterError(f"count: the branch along {vary} from {start:g} to {stop:g} "
+                             f"meets {len(z0)} fold(s){why}, not {count}")
+    disc = discretise(path.template, n)
+    z0, p0 = jnp.asarray(z0), np.asarray(path.start[1:], float)
+
+    def f(p):
+        values, _, converged = _fold_values_program(path, disc, start, stop - start,
+                                                    jnp.asarray(p, jnp.float64), z0)
+        return values, converged
+
+    return f, p0

@@ -40,8 +40,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise
-from jaxrod.equilibria.folds import fold_guesses
+from jaxrod.equilibria.equilibrium import DEFAULT_N, discretise
+from jaxrod.equilibria.folds import fold_guesses, fold_values
 from jaxrod.equilibria.trace import check_range
 from jaxrod.inverse.fit_record import OFFSET, Prior, SceneFit, record
 from jaxrod.params import ParameterError, check_value
@@ -50,21 +50,10 @@ from jaxrod.progress import Interrupted, progress_bar
 from jaxrod.scenes.files import FileScene, apply_settings, scene_from
 from jaxrod.scenes.path import PROBE, along
 from jaxrod.scenes.scene import Scene
-from jaxrod.solvers.folds import differentiable_fold
 from jaxrod.solvers.least_squares import forward_mode, least_squares_run
 from jaxrod.status import Status
 
 # --- the program ----------------------------------------------------------------------------
-
-def fold_values(path, disc, origin, span, p, z):
-    """The folds' values at the path's inputs p (after ``vary``) from fold states z
-    (K, 2m + 1) at nearby inputs: (values, new states, each solve converged); implicitly
-    differentiable in p (``differentiable_fold``)."""
-    m = disc.size
-    z_new, stats = jax.vmap(lambda zi: differentiable_fold(
-        MODEL, zi[:m], zi[-1], zi[m:2 * m], (path, disc, origin, span, p)))(z)
-    return origin + span * z_new[:, -1], z_new, jnp.all(stats[:, 0] == 1.0)
-
 
 def _program(path, disc, origin, span, z0, p0, free, data, mask, sigma, which, sign,
              prior_mean, prior_scale, lower, upper, magnets, max_iter):
