@@ -86,6 +86,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "snap": ("jaxrod.dynamics.snap", "snap"),
         "fit_folds": ("jaxrod.inverse.scene_fit", "fit_folds"),
         "design_folds": ("jaxrod.inverse.scene_fit", "design_folds"),
+        "design_shape": ("jaxrod.inverse.shape_design", "design_shape"),
         "fold_map": ("jaxrod.bistability.fold_map", "fold_map"),
         "read_fold_map": ("jaxrod.bistability.fold_map", "read_fold_map"),
         "Status": ("jaxrod.status", "Status"),

@@ -233,6 +233,8 @@ BAD = [
     (CANTILEVER.replace('kind = "hard"', 'kind = "permanent"'), "magnetisation.kind", "hard"),
     ("[rod]\nlength = 0.05\n[[field]]\nkind = \"uniform\"\nB = 1e-3\nangel_deg = 90\n",
      "field.0.angel_deg", "angle_deg"),
+    (CANTILEVER.replace("remanence = 1.0e5", "remanence = 1.0e5\nstrength_profile = [1.0, nan]"),
+     "magnetisation.strength_profile", "finite"),
 ]
 
 

@@ -1,14 +1,18 @@
 """A uniform field acting on a programmed hard magnetisation: the remanence at an angle
-phi(s) to the tangent in the material frame (programmed profiles of magnetic soft robots and
-cilia), on the planar rod, where the material frame is (d1, d3) with d1 = (cos theta, 0,
--sin theta): m = cos(phi) d3 + sin(phi) d1 = (sin(theta + phi), 0, cos(theta + phi)), and
+phi(s) to the tangent in the material frame, of strength mu(s) relative to the load
+(programmed profiles of magnetic soft robots, catheters and cilia), on the planar rod, where
+the material frame is (d1, d3) with d1 = (cos theta, 0, -sin theta):
+m = mu(s) (cos(phi) d3 + sin(phi) d1) = mu(s) (sin(theta + phi), 0, cos(theta + phi)), and
 the Zeeman energy is the density
 
-    -load b . m = -load cos(theta + phi(s) - a),   load = A_c M_r B L^2 / (E I),
+    -load b . m = -load mu(s) cos(theta + phi(s) - a),   load = A_c M_r B L^2 / (E I),
 
-with the field's angle a from +z toward +x and phi(s) = sum_k c_k s^k (radians). Unlike
-the tangent magnetisation (``zeeman``), it is no exact derivative along the rod: a density
-of the jet. Planar rods only (a 3D rod's director chart carries no d1).
+with the field's angle a from +z toward +x, phi(s) = sum_k c_k s^k (radians) and
+mu(s) = sum_k d_k T_k(2 s - 1) (Chebyshev polynomials on [0, 1]: well conditioned as free
+inputs of a design; [1] is the uniform remanence). Its moment balance is
+theta'' + load mu(s) sin(a - theta - phi(s)) = 0 with theta'(1) = 0. Unlike the tangent
+magnetisation (``zeeman``), it is no exact derivative along the rod: a density of the jet.
+Planar rods only (a 3D rod's director chart carries no d1).
 """
 
 from __future__ import annotations
@@ -23,22 +27,32 @@ from jaxrod.scenes.terms import term
 
 @term("programmed")
 class ProgrammedMagnetisation:
-    """load, the field's angle a from +z toward +x (radians), and the magnetisation's angle
-    to the tangent as polynomial coefficients in s (radians; [phi] for a constant angle)."""
+    """load, the field's angle a from +z toward +x (radians), the magnetisation's angle to
+    the tangent as polynomial coefficients in s (radians; [phi] for a constant angle), and
+    its strength relative to the load as Chebyshev coefficients in 2 s - 1 ([1]: uniform)."""
 
     planar_only = True  # not a field: the 3D rod's chart carries no d1
 
     load: jax.Array | float
     angle: jax.Array | float = 0.0
     profile: jax.Array = dataclasses.field(default_factory=lambda: jnp.zeros(1))
+    strength: jax.Array = dataclasses.field(default_factory=lambda: jnp.ones(1))
 
     def phi(self, s):
         """phi(s) = sum_k c_k s^k."""
         return jnp.polyval(jnp.asarray(self.profile)[::-1], s)
 
+    def mu(self, s):
+        """mu(s) = sum_k d_k T_k(2 s - 1) (Clenshaw's recurrence)."""
+        x = 2.0 * s - 1.0
+        b1 = b2 = jnp.zeros_like(x)
+        for d in jnp.asarray(self.strength)[:0:-1]:
+            b1, b2 = d + 2.0 * x * b1 - b2, b1
+        return jnp.asarray(self.strength)[0] + x * b1 - b2
+
     def planar(self, theta, dtheta, s):
-        """-load cos(theta + phi(s) - a)."""
-        return -self.load * jnp.cos(theta + self.phi(s) - self.angle)
+        """-load mu(s) cos(theta + phi(s) - a)."""
+        return -self.load * self.mu(s) * jnp.cos(theta + self.phi(s) - self.angle)
 
     def density(self, d3, dd3, s):
         """The planar density from d3 = (sin theta, 0, cos theta) (in-plane rods only)."""

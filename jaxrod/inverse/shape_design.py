@@ -1,0 +1,169 @@
+"""Design for a target shape: the inputs of a planar scene (a remanence profile's
+coefficients, a field, a stiffness group) whose equilibrium takes a target shape.
+
+The target is the tangent angle theta*(s_i) at points s_i in [0, 1] (degrees, from +z toward
++x). The free inputs p (keys of the scene or rig) minimise
+
+    0.5 sum_i ((theta(s_i; p) - theta*(s_i)) / sigma)^2 + 0.5 smoothing |p - p0|^2 / |p0|^2,
+
+where theta(.; p) is the equilibrium grad E(x; p) = 0 continued from the last accepted one
+by Newton, differentiated implicitly (dx/dp = -H^-1 d(grad E)/dp: exact gradients, never
+finite differences), with the least squares of ``jaxrod.solvers.least_squares`` (L-BFGS
+directions in Gauss-Newton scaling, Armijo line search; one compiled program for every
+target of the scene's structure). Bounds reject trial points outside them. The answer is
+checked: the Hessian's smallest eigenvalue (``stable``) and the equilibrium reached by
+ramping the loads of the designed scene from zero (``jaxrod.equilibrium``): ``reachable``
+where it is the designed one.
+
+For a hard magnetisation mu(s) along the tangent in a uniform field at angle a, the moment
+balance theta'' + load mu(s) sin(a - theta) = 0, theta'(1) = 0 gives the profile of a
+target in closed form, mu = -theta*'' / (load sin(a - theta*)) (checked in the tests).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod import spectral
+from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise, equilibrium
+from jaxrod.inverse.scene_fit import with_values
+from jaxrod.params import ParameterError, check_value
+from jaxrod.programs import jit
+from jaxrod.scenes.files import FileScene
+from jaxrod.scenes.path import along
+from jaxrod.scenes.scene import Scene
+from jaxrod.solvers.least_squares import forward_mode, least_squares_run
+from jaxrod.solvers.newton import implicit_newton
+from jaxrod.status import Status
+
+#: Fewest target points.
+MIN_POINTS = 3
+
+
+@dataclasses.dataclass(frozen=True)
+class ShapeDesign:
+    """A design for a target shape: ``values`` (key -> value of each free input),
+    ``tangent_deg`` the designed equilibrium's tangent angle at the target's ``s``,
+    ``shape_error_deg`` its largest difference from the target, ``stable`` (the Hessian's
+    smallest eigenvalue ``smallest_eigenvalue`` > 0), ``reachable`` (ramping the designed
+    scene's loads from zero reaches this equilibrium, to 1e-8 rad), ``converged`` (the least
+    squares converged and the equilibrium solves did), ``iterations``, ``status``,
+    ``scene`` the designed scene (or rig) and ``state`` its equilibrium."""
+
+    values: dict
+    s: np.ndarray
+    target_deg: np.ndarray
+    tangent_deg: np.ndarray
+    shape_error_deg: float
+    stable: bool
+    smallest_eigenvalue: float
+    reachable: bool
+    converged: bool
+    iterations: int
+    status: Status
+    scene: object
+    state: np.ndarray
+
+    def as_dict(self) -> dict:
+        return {"values": self.values, "s": self.s.tolist(),
+                "target_deg": self.target_deg.tolist(), "tangent_deg": self.tangent_deg.tolist(),
+                "shape_error_deg": self.shape_error_deg, "stable": self.stable,
+                "smallest_eigenvalue": self.smallest_eigenvalue, "reachable": self.reachable,
+                "converged": self.converged, "iterations": self.iterations,
+                "status": self.status.name.lower()}
+
+
+def _program(path, disc, x0, p0, free, rows, target, sigma, smoothing, lower, upper,
+             max_iter):
+    """The least squares over p (the path's inputs after the load scale, scaled by |p0|)
+    from the equilibrium x0 at p0."""
+    unit = jnp.where(p0 == 0.0, 1.0, jnp.abs(p0))
+
+    def gradient(x, p):
+        return MODEL.gradient(x, 0.0, (path, disc, 1.0, 1.0, p))
+
+    def residuals(u, x):
+        p = u * unit
+        x_new, stats = implicit_newton(gradient, x, p, tol=1e-12,
+                                       jacobian=lambda y, q: MODEL.hessian(
+                                           y, 0.0, (path, disc, 1.0, 1.0, q)))
+        ok = (stats[0] == 1.0) & jnp.all(~free | ((p >= lower) & (p <= upper)))
+        r = (rows @ x_new - target) / sigma
+        return jnp.concatenate([r, smoothing * (u - p0 / unit) * free]), x_new, ok
+
+    res = least_squares_run(forward_mode(residuals), p0 / unit, x0, free,
+                            target.shape[0] + p0.shape[0], True, max_iter)
+    return res._replace(p=res.p * unit, J=res.J / unit)
+
+
+_design_program = jit(_program, static_argnames=("max_iter",))
+
+
+def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT_N,
+                 bounds: dict | None = None, sigma_deg: float = 1.0, smoothing: float = 0.0,
+                 max_iter: int = 80) -> ShapeDesign:
+    """The inputs ``free`` (keys) of a planar scene or rig whose equilibrium's tangent angle
+    at ``s`` is ``target_deg`` (module docstring). The scene's values of the free inputs are
+    the start; ``bounds``: key -> (lo, hi); ``smoothing`` > 0 pulls the inputs towards the
+    start (relative); ``sigma_deg`` scales the residuals. A target no design reaches
+    returns ``converged`` True with its ``shape_error_deg`` (the least-squares answer),
+    never an error."""
+    inner = scene.scene if isinstance(scene, FileScene) else scene
+    if inner.geometry != "planar":
+        raise ParameterError("scene: shape targets are tangent angles of a planar rod "
+                             f"(geometry = \"planar\"), got {inner.geometry!r}")
+    free = tuple(free)
+    if not free or len(set(free)) != len(free):
+        raise ParameterError(f"free: one or more distinct inputs, got {free}")
+    s = np.asarray(s, float).reshape(-1)
+    target = np.asarray(target_deg, float).reshape(-1)
+    if s.size != target.size or s.size < MIN_POINTS:
+        raise ParameterError(f"target: at least {MIN_POINTS} points (s, tangent_deg), as many "
+                             f"s as angles, got {s.size} and {target.size}")
+    if not (np.all(np.isfinite(s)) and np.all(np.isfinite(target))):
+        raise ParameterError("target: s and the angles must be finite (no NaN)")
+    if np.any((s < 0.0) | (s > 1.0)):
+        raise ParameterError(f"target: s must lie in [0, 1], got {s.min():g} to {s.max():g}")
+    check_value("sigma_deg", sigma_deg, lambda v: v > 0, "a number > 0")
+    check_value("smoothing", smoothing, lambda v: v >= 0, "a number >= 0")
+    path = along(scene, ("load_scale", *free))
+    p0 = np.asarray(path.start[1:], float)
+    bounds = dict(bounds or {})
+    for key in bounds:
+        if key not in free:
+            raise ParameterError(f"bounds: {key!r} is not free ({', '.join(free)})")
+    lower = np.array([bounds.get(k, (-np.inf, np.inf))[0] for k in free], float)
+    upper = np.array([bounds.get(k, (-np.inf, np.inf))[1] for k in free], float)
+    if np.any(lower >= upper) or np.any((p0 < lower) | (p0 > upper)):
+        raise ParameterError("bounds: each (lo, hi) with lo < hi, holding the scene's value "
+                             "(the start)")
+    start = equilibrium(scene, n=n, throw=False)
+    if not start.converged:
+        raise ParameterError(f"scene: its equilibrium at the start did not converge "
+                             f"({start.status.message})")
+    disc = discretise(path.template, n)
+    rows = spectral.interpolation_matrix(disc.n, s) @ np.asarray(disc.to_full)
+    res = jax.device_get(_design_program(
+        path, disc, jnp.asarray(start.state), jnp.asarray(p0), jnp.ones(p0.size, bool),
+        jnp.asarray(rows), jnp.radians(jnp.asarray(target)), math.radians(sigma_deg),
+        float(smoothing), jnp.asarray(lower), jnp.asarray(upper), max_iter))
+    values = dict(zip(free, (float(v) for v in res.p)))
+    designed = with_values(scene, values)
+    x = np.asarray(res.aux)
+    tangent = np.degrees(rows @ x)
+    eig = float(np.linalg.eigvalsh(np.asarray(MODEL.hessian(
+        jnp.asarray(x), 0.0, (path, disc, 1.0, 1.0, jnp.asarray(res.p)))))[0])
+    ramped = equilibrium(designed, n=n, throw=False)
+    reachable = bool(ramped.converged) and float(np.max(np.abs(ramped.state - x))) <= 1e-8
+    converged = bool(res.converged) and bool(res.ok)
+    return ShapeDesign(values=values, s=s, target_deg=target, tangent_deg=tangent,
+                       shape_error_deg=float(np.max(np.abs(tangent - target))),
+                       stable=eig > 0.0, smallest_eigenvalue=eig, reachable=reachable,
+                       converged=converged, iterations=int(res.iterations),
+                       status=Status.SUCCESS if converged else Status.NOT_CONVERGED,
+                       scene=designed, state=x)
