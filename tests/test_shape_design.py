@@ -11,6 +11,7 @@ theta*(s) = c (s - s^2 / 2) (theta*(0) = 0, theta*'(1) = 0, theta*'' = -c),
   the arcsine that a design started at a small angle reaches: the stable one).
 """
 
+import json
 import math
 
 import numpy as np
@@ -81,3 +82,49 @@ def test_bad_targets_are_named(tmp_path, s, target, match):
     rig = _rig(tmp_path, "strength_profile = [1.0, 0.0]")
     with pytest.raises(ParameterError, match=f"target: .*{match}"):
         design_shape(rig, ["magnetisation.strength_profile.1"], s, target, n=8)
+
+
+def _target_csv(path, rows):
+    path.write_text("s,tangent_deg\n" + "".join(f"{a!r},{b!r}\n" for a, b in rows))
+    return path
+
+
+def test_the_command_line_designs_a_profile_for_a_target_shape(tmp_path):
+    """``jaxrod design RIG --free magnetisation.strength_profile --target-shape FILE.csv
+    --json``: the list's key frees its eight coefficients; the remanence load load mu(s) at
+    101 points is the closed form's c / cos theta*(s) to 1e-6 (its degree-7 approximation
+    ~2e-7); design.json and shape.png with --out."""
+    from command_line import run_cli
+
+    rig = tmp_path / "rig.toml"
+    rig.write_text(RIG.format(magnetisation=f"strength_profile = {[1.0] + [0.0] * 7}"))
+    target = _target_csv(tmp_path / "target.csv",
+                         zip(S.tolist(), TARGET_DEG.tolist()))
+    proc = run_cli("design", rig, "--free", "magnetisation.strength_profile",
+                   "--target-shape", target, "--n", "16", "--out", tmp_path / "out", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert len(out["free"]) == 8 and out["converged"] and out["stable"]
+    assert out["shape_error_deg"] <= 1e-6
+    s = np.asarray(out["profile"]["s"])
+    assert s.size == 101 and s[0] == 0.0 and s[-1] == 1.0
+    np.testing.assert_allclose(out["profile"]["strength"], C / np.cos(C * (s - s**2 / 2)),
+                               rtol=0, atol=1e-6)
+    assert (tmp_path / "out" / "design.json").exists()
+    assert (tmp_path / "out" / "shape.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("rows, words", [
+    ([(0.0, 0.0), (0.5, math.nan), (1.0, 2.0)], "finite"),
+    ([(0.0, 0.0), (0.5, 1.0), (1.5, 2.0)], "s must lie in"),
+    ([(0.0, 0.0), (1.0, 2.0)], "at least 3 rows")])
+def test_bad_target_files_exit_2_with_one_line(tmp_path, rows, words):
+    from command_line import run_cli
+
+    rig = tmp_path / "rig.toml"
+    rig.write_text(RIG.format(magnetisation="strength_profile = [1.0, 0.0]"))
+    proc = run_cli("design", rig, "--free", "magnetisation.strength_profile",
+                   "--target-shape", _target_csv(tmp_path / "t.csv", rows))
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "target-shape" in lines[0] and words in lines[0]

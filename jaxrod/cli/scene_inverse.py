@@ -27,7 +27,15 @@ def add_design_scene_options(de) -> None:
     add_scene_file_inputs(de, vary=True, vary_name="--path")
     de.add_argument("--targets", type=float, nargs="+", help="scene file: the folds' "
                     "targets along --path, in order; with --free KEYS")
-    de.add_argument("--free", default=None, help="scene file: comma-separated keys")
+    de.add_argument("--free", action="append", default=[], metavar="KEY",
+                    help="scene file: an input to solve for (a list's key frees all its "
+                    "coefficients, e.g. magnetisation.strength_profile); repeatable, or "
+                    "comma-separated")
+    de.add_argument("--target-shape", default=None, metavar="FILE.csv",
+                    help="scene file: design for a target shape, a CSV with header "
+                    "s,tangent_deg (the tangent angle from +z toward +x at s in [0, 1])")
+    de.add_argument("--out", default=None, help="directory for design.json and shape.png "
+                    "(a shape design)")
 
 
 def _legacy_keys(cal) -> dict:
@@ -43,7 +51,8 @@ def _free_and_bounds(args, file):
     if not args.free:
         raise ParameterError("free: name the inputs to solve for (--free KEY1,KEY2) with a "
                              "scene file")
-    keys = [k.strip() for k in args.free.split(",") if k.strip()]
+    items = [args.free] if isinstance(args.free, str) else args.free  # fit: one string
+    keys = [k.strip() for item in items for k in item.split(",") if k.strip()]
     free = [file.input_of(k, "free") for k in keys]
     bounds = {}
     for item in args.bounds:
@@ -99,9 +108,14 @@ def fit_on_file(args) -> int:
 
 
 def design_on_file(args) -> int:
-    """``jaxrod design RIG --path KEY --from A --to B --targets V1 V2 --free K1,K2``."""
+    """``jaxrod design RIG --path KEY --from A --to B --targets V1 V2 --free K1,K2``, or
+    ``jaxrod design RIG --free KEY --target-shape FILE.csv`` (``shape_on_file``)."""
     from jaxrod.inverse.scene_fit import design_folds
 
+    if args.target_shape is not None:
+        from jaxrod.cli.shape_design import shape_on_file
+
+        return shape_on_file(args)
     file = _load(args)
     args.vary = args.path
     key, start, stop, factor = _range(args, file)
