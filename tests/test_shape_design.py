@@ -8,7 +8,9 @@ theta*(s) = c (s - s^2 / 2) (theta*(0) = 0, theta*'(1) = 0, theta*'' = -c),
 * the strength profile along the tangent (phi = 0): mu(s) = c / (load cos theta*(s));
 * the angle profile at uniform strength: sin(a - theta* - phi) = c / load, so
   phi(s) = pi / 2 - arcsin(c / load) - c s + (c / 2) s^2, a quadratic in s (the branch of
-  the arcsine that a design started at a small angle reaches: the stable one).
+  the arcsine that a design started at a small angle reaches: the stable one);
+* a stiffness taper beta(s) = E I(s) / E I at uniform strength along the tangent:
+  (beta theta')' + load cos theta = 0, so beta(s) = int_s^1 load cos theta* dt / theta*'(s).
 """
 
 import json
@@ -72,6 +74,29 @@ def test_an_angle_profile_for_a_target_shape_is_the_closed_form(tmp_path):
     closed = [math.pi / 2 - math.asin(C / LOAD), -C, C / 2]
     np.testing.assert_allclose(np.radians([d.values[k] for k in keys]), closed, rtol=0,
                                atol=1e-8)
+
+
+def test_a_stiffness_taper_for_a_target_shape_is_the_closed_form(tmp_path):
+    """A tapered rod, E I(s) / E I = beta(s) (eight Chebyshev coefficients from a uniform
+    beta = 3, near the answer's scale), magnetised along the tangent in the field at 90
+    degrees: (beta theta')' + load cos theta = 0 with beta theta'(1) = 0 gives
+    beta(s) = int_s^1 load cos theta*(t) dt / theta*'(s) (the integral by scipy's quad), to
+    1e-6 on [0, 0.99] (the quotient is 0/0 at s = 1); stable, reached by the ramp."""
+    from scipy.integrate import quad
+
+    K = 8
+    path = tmp_path / "taper.toml"
+    path.write_text(RIG.format(magnetisation="").replace(
+        'support = "clamped"', f'support = "clamped"\nstiffness_profile = {[3.0] + [0.0] * 7}'))
+    keys = [f"rod.stiffness_profile.{k}" for k in range(K)]
+    d = design_shape(jr.load_scene(str(path)), keys, S, TARGET_DEG, n=16)
+    assert d.converged and d.stable and d.reachable and d.shape_error_deg <= 1e-6
+    s = np.linspace(0.0, 0.99, 34)
+    theta = lambda t: C * (t - t**2 / 2)
+    closed = [quad(lambda t: LOAD * math.cos(theta(t)), a, 1.0, epsabs=1e-13)[0]
+              / (C * (1.0 - a)) for a in s]
+    beta = np.polynomial.chebyshev.chebval(2 * s - 1, [d.values[k] for k in keys])
+    np.testing.assert_allclose(beta, closed, rtol=0, atol=1e-6)
 
 
 @pytest.mark.parametrize("s, target, match", [

@@ -10,7 +10,8 @@ where theta(.; p) is the equilibrium grad E(x; p) = 0 continued from the last ac
 by Newton, differentiated implicitly (dx/dp = -H^-1 d(grad E)/dp: exact gradients, never
 finite differences), with the least squares of ``jaxrod.solvers.least_squares`` (L-BFGS
 directions in Gauss-Newton scaling, Armijo line search; one compiled program for every
-target of the scene's structure). Bounds reject trial points outside them. The answer is
+target of the scene's structure). Bounds, and an unstable equilibrium (the Hessian not
+positive definite: a design the rod would snap away from), reject a trial point. The answer is
 checked: the Hessian's smallest eigenvalue (``stable``) and the equilibrium reached by
 ramping the loads of the designed scene from zero (``jaxrod.equilibrium``): ``reachable``
 where it is the designed one.
@@ -92,7 +93,9 @@ def _program(path, disc, x0, p0, free, rows, target, sigma, smoothing, lower, up
         x_new, stats = implicit_newton(gradient, x, p, tol=1e-12,
                                        jacobian=lambda y, q: MODEL.hessian(
                                            y, 0.0, (path, disc, 1.0, 1.0, q)))
-        ok = (stats[0] == 1.0) & jnp.all(~free | ((p >= lower) & (p <= upper)))
+        H = MODEL.hessian(x_new, 0.0, (path, disc, 1.0, 1.0, p))
+        ok = (stats[0] == 1.0) & jnp.all(~free | ((p >= lower) & (p <= upper))) \
+            & (jnp.linalg.eigvalsh(H)[0] > 0.0)  # a stable equilibrium only
         r = (rows @ x_new - target) / sigma
         return jnp.concatenate([r, smoothing * (u - p0 / unit) * free]), x_new, ok
 

@@ -105,9 +105,23 @@ def angle_profile(mag: dict, kind, geometry: str):
     return np.radians(np.asarray(c, float))
 
 
+def coefficients(table: dict, key: str, where: str, what: str):
+    """A list of finite numbers, Chebyshev coefficients in 2 s - 1 of ``what`` along the rod
+    ([1.0] is uniform), or None where the key is absent."""
+    if key not in table:
+        return None
+    d = table[key]
+    if not isinstance(d, list) or not d or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in d):
+        fail(f"{where}{key}", f"must be a list of finite numbers (Chebyshev coefficients of "
+                              f"{what} in 2 s - 1: d0 T0 + d1 T1 + ...; [1.0] is uniform), "
+                              f"got {d!r}")
+    return np.asarray(d, float)
+
+
 def strength_profile(mag: dict, kind, geometry: str, fields):
-    """The remanence's strength along s relative to the load, Chebyshev coefficients in
-    2 s - 1 (``strength_profile = [d0, d1, ...]``; [1.0] uniform), or None."""
+    """The remanence's strength along s relative to the load (``coefficients``), or None."""
     if "strength_profile" not in mag:
         return None
     key = "magnetisation.strength_profile"
@@ -117,13 +131,7 @@ def strength_profile(mag: dict, kind, geometry: str, fields):
         fail(key, "a remanence profile needs geometry = \"planar\"")
     if any(f.get("kind") != "uniform" for f in fields):
         fail(key, "a remanence profile acts in uniform fields")
-    d = mag["strength_profile"]
-    if not isinstance(d, list) or not d or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-            for v in d):
-        fail(key, f"must be a list of finite numbers (Chebyshev coefficients in 2 s - 1: "
-                   f"d0 T0 + d1 T1 + ...; [1.0] is uniform), got {d!r}")
-    return np.asarray(d, float)
+    return coefficients(mag, "strength_profile", "magnetisation.", "the remanence")
 
 
 def direction(angle: float):

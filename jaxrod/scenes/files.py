@@ -4,7 +4,9 @@ file's keys to the scene's inputs.
 A file in SI units (the default) or, with ``units = "nondimensional"``, in the groups:
 
     [rod]            length (m), radius (m), youngs_modulus (Pa), support ("clamped" at the
-                     origin pointing along +z, or "pinned"), density (kg/m^3, with gravity)
+                     origin pointing along +z, or "pinned"), density (kg/m^3, with gravity),
+                     stiffness_profile = [b0, b1, ...] (a taper: E I(s) / E I, Chebyshev
+                     coefficients in 2 s - 1; the radius and E give E I)
     [magnetisation]  kind = "hard" (remanent, fixed in the material; remanence in A/m along
                      the tangent, or at angle_deg to it, or at a profile along s,
                      profile_deg = [c0, c1, ...] degrees, c0 + c1 s + ...; uniform fields
@@ -49,6 +51,7 @@ from jaxrod.params import MU0, ParameterError
 from jaxrod.scenes.file_entries import (
     angle_profile,
     check_plausible,
+    coefficients,
     direction,
     fail,
     number,
@@ -66,13 +69,15 @@ from jaxrod.scenes.terms import (
     PointDipole,
     ProgrammedDipole,
     ProgrammedMagnetisation,
+    TaperedBending,
     Zeeman,
 )
 
 #: Allowed keys of each table, SI and nondimensional.
 TABLES = {
-    "rod": {"si": ("length", "radius", "youngs_modulus", "support", "density"),
-            "nondimensional": ("support",)},
+    "rod": {"si": ("length", "radius", "youngs_modulus", "support", "density",
+                   "stiffness_profile"),
+            "nondimensional": ("support", "stiffness_profile")},
     "magnetisation": {"si": ("kind", "remanence", "saturation", "angle_deg", "profile_deg",
                              "strength_profile"),
                       "nondimensional": ("kind", "angle_deg", "profile_deg", "strength_profile")},
@@ -227,7 +232,10 @@ def scene_from(data: dict) -> FileScene:
         fail("rod.support", f"must be \"clamped\" or \"pinned\", got {support!r}")
     inputs: dict[str, tuple[str, float]] = {}
     margins: dict[str, float] = {}
-    terms = {"bending": Bending()}
+    taper = coefficients(rod, "stiffness_profile", "rod.", "E I(s) / E I")
+    terms = {"bending": Bending() if taper is None else TaperedBending(taper)}
+    for k in range(0 if taper is None else len(taper)):
+        inputs[f"rod.stiffness_profile.{k}"] = (f"bending.stiffness.{k}", 1.0)
     if si:
         L = number(rod, "length", "rod.")
         r = number(rod, "radius", "rod.")

@@ -62,7 +62,8 @@ def term(name: str):
 SHIPPED = {"Anisotropy": "anisotropy", "Bending": "bending", "Dipole": "dipole",
            "Gravity": "gravity", "PathDipole": "path_dipole", "PointDipole": "point_dipole",
            "ProgrammedDipole": "programmed_dipole",
-           "ProgrammedMagnetisation": "programmed", "Zeeman": "zeeman"}
+           "ProgrammedMagnetisation": "programmed", "TaperedBending": "tapered_bending",
+           "Zeeman": "zeeman"}
 
 
 def __getattr__(name: str):
@@ -74,4 +75,5 @@ def __getattr__(name: str):
 
 
 __all__ = ["TERMS", "term", "Anisotropy", "Bending", "Dipole", "Gravity", "PathDipole",
-           "PointDipole", "ProgrammedDipole", "ProgrammedMagnetisation", "Zeeman"]
+           "PointDipole", "ProgrammedDipole", "ProgrammedMagnetisation", "TaperedBending",
+           "Zeeman"]

@@ -23,6 +23,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrod.scenes.terms import term
+from jaxrod.scenes.terms.tapered_bending import chebyshev_series
 
 
 @term("programmed")
@@ -43,12 +44,8 @@ class ProgrammedMagnetisation:
         return jnp.polyval(jnp.asarray(self.profile)[::-1], s)
 
     def mu(self, s):
-        """mu(s) = sum_k d_k T_k(2 s - 1) (Clenshaw's recurrence)."""
-        x = 2.0 * s - 1.0
-        b1 = b2 = jnp.zeros_like(x)
-        for d in jnp.asarray(self.strength)[:0:-1]:
-            b1, b2 = d + 2.0 * x * b1 - b2, b1
-        return jnp.asarray(self.strength)[0] + x * b1 - b2
+        """mu(s) = sum_k d_k T_k(2 s - 1)."""
+        return chebyshev_series(self.strength, s)
 
     def planar(self, theta, dtheta, s):
         """-load mu(s) cos(theta + phi(s) - a)."""
