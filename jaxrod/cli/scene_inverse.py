@@ -47,26 +47,35 @@ def _legacy_keys(cal) -> dict:
                                  "residuals_deg", "warning")}
 
 
-def _free_and_bounds(args, file):
-    if not args.free:
-        raise ParameterError("free: name the inputs to solve for (--free KEY1,KEY2) with a "
-                             "scene file")
-    items = [args.free] if isinstance(args.free, str) else args.free  # fit: one string
-    keys = [k.strip() for item in items for k in item.split(",") if k.strip()]
-    free = [file.input_of(k, "free") for k in keys]
+def free_items(args) -> list[str]:
+    """The keys of ``--free`` (repeatable, or comma-separated; the fit's is one string)."""
+    items = [args.free] if isinstance(args.free, str) else args.free or []
+    return [k.strip() for item in items for k in item.split(",") if k.strip()]
+
+
+def bounds_of(args, keys, scale=lambda key: (key, 1.0)) -> dict:
+    """``--bounds KEY=LO:HI`` of free inputs: scale(key) -> (the bound's key, its factor)."""
     bounds = {}
     for item in args.bounds:
         key, sep, rest = item.partition("=")
         lo, sep2, hi = rest.partition(":")
         if not sep or not sep2 or key.strip() not in keys:
             raise ParameterError(f"bounds: write KEY=LO:HI for a free input, got {item!r}")
-        scene_key, factor = file.input_of(key.strip(), "bounds")
+        name, factor = scale(key.strip())
         try:
-            pair = sorted((factor * float(lo), factor * float(hi)))
+            bounds[name] = tuple(sorted((factor * float(lo), factor * float(hi))))
         except ValueError:
             raise ParameterError(f"bounds: {item!r} is not KEY=LO:HI") from None
-        bounds[scene_key] = tuple(pair)
-    return keys, free, bounds
+    return bounds
+
+
+def _free_and_bounds(args, file):
+    keys = free_items(args)
+    if not keys:
+        raise ParameterError("free: name the inputs to solve for (--free KEY1,KEY2) with a "
+                             "scene file")
+    free = [file.input_of(k, "free") for k in keys]
+    return keys, free, bounds_of(args, keys, lambda k: file.input_of(k, "bounds"))
 
 
 def _report(args, file, keys, free, fit, factor, what: str) -> int:

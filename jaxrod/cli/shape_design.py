@@ -8,6 +8,7 @@ import json
 import numpy as np
 
 from jaxrod.cli.scene_file import _load
+from jaxrod.cli.scene_inverse import bounds_of, free_items
 from jaxrod.params import ParameterError
 
 
@@ -67,20 +68,11 @@ def shape_on_file(args) -> int:
 
     file = _load(args)
     s, target = read_target(args.target_shape)
-    items = [k.strip() for item in args.free for k in item.split(",") if k.strip()]
+    items = free_items(args)
     if not items:
         raise ParameterError("free: name the inputs to solve for (--free KEY, repeatable)")
     keys = free_keys(file, items)
-    bounds = {}
-    for item in args.bounds:
-        key, sep, rest = item.partition("=")
-        lo, sep2, hi = rest.partition(":")
-        if not sep or not sep2 or key.strip() not in keys:
-            raise ParameterError(f"bounds: write KEY=LO:HI for a free input, got {item!r}")
-        try:
-            bounds[key.strip()] = tuple(sorted((float(lo), float(hi))))
-        except ValueError:
-            raise ParameterError(f"bounds: {item!r} is not KEY=LO:HI") from None
+    bounds = bounds_of(args, keys)
     d = design_shape(file, keys, s, target, n=args.n, bounds=bounds)
     out = {"rig": args.rig, "free": keys, **d.as_dict(),
            "profile": _profile(d.scene, np.linspace(0.0, 1.0, 101))}
