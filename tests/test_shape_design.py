@@ -153,3 +153,23 @@ def test_bad_target_files_exit_2_with_one_line(tmp_path, rows, words):
     assert proc.returncode == 2 and proc.stdout == ""
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "target-shape" in lines[0] and words in lines[0]
+
+
+def test_a_strength_profile_places_a_fold_at_a_field_angle(tmp_path):
+    """A design through the folds (``jr.design_folds``) with a profile's coefficient free:
+    the hard-magnetic cantilever (load 5, folds at 212.15 and 147.85 degrees with a uniform
+    remanence) gets its first fold at 200 degrees from the slope of its strength; a fresh
+    continuation from the straight rod of the designed rig finds it there to 1e-9 degrees,
+    and the loop's width (the two folds' difference) with it."""
+    path = tmp_path / "hm.toml"
+    path.write_text(RIG.format(magnetisation="strength_profile = [1.0, 0.0]").replace(
+        "load = 2.0", "load = 5.0"))
+    rig = jr.load_scene(str(path))
+    key = "magnetisation.strength_profile.1"
+    d = jr.design_folds(rig, "field.0.angle_deg", (90.0, 359.0), [200.0, math.nan], [key],
+                        n=16)
+    assert d.converged
+    fresh = jr.folds(jr.load_scene(str(path), [f"{key}={d.estimates[key]!r}"]),
+                     "field.0.angle_deg", 90.0, 359.0, n=16)
+    assert len(fresh) == 2 and abs(fresh[0].value - 200.0) <= 1e-9
+    assert abs((fresh[0].value - fresh[1].value) - (d.folds[0] - d.folds[1])) <= 1e-9
