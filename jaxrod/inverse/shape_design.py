@@ -79,28 +79,32 @@ class ShapeDesign:
                 "status": self.status.name.lower()}
 
 
-def _program(path, disc, x0, p0, free, rows, target, sigma, smoothing, lower, upper,
+def _program(path, disc, x0, p0, free, cases, rows, target, sigma, smoothing, lower, upper,
              max_iter):
     """The least squares over p (the path's inputs after the load scale, scaled by |p0|)
-    from the equilibrium x0 at p0."""
+    from the equilibria x0 (K, m) of the K load cases at p0: case k sets the path's last
+    inputs to ``cases[k]``; target (K, points)."""
     unit = jnp.where(p0 == 0.0, 1.0, jnp.abs(p0))
 
-    def gradient(x, p):
-        return MODEL.gradient(x, 0.0, (path, disc, 1.0, 1.0, p))
+    def args(p, case):
+        return (path, disc, 1.0, 1.0, jnp.concatenate([p, case]))
+
+    def solve(p, x, case):
+        x_new, stats = implicit_newton(
+            lambda y, q: MODEL.gradient(y, 0.0, args(q, case)), x, p, tol=1e-12,
+            jacobian=lambda y, q: MODEL.hessian(y, 0.0, args(q, case)))
+        stable = jnp.linalg.eigvalsh(MODEL.hessian(x_new, 0.0, args(p, case)))[0] > 0.0
+        return x_new, (stats[0] == 1.0) & stable  # a stable equilibrium only
 
     def residuals(u, x):
         p = u * unit
-        x_new, stats = implicit_newton(gradient, x, p, tol=1e-12,
-                                       jacobian=lambda y, q: MODEL.hessian(
-                                           y, 0.0, (path, disc, 1.0, 1.0, q)))
-        H = MODEL.hessian(x_new, 0.0, (path, disc, 1.0, 1.0, p))
-        ok = (stats[0] == 1.0) & jnp.all(~free | ((p >= lower) & (p <= upper))) \
-            & (jnp.linalg.eigvalsh(H)[0] > 0.0)  # a stable equilibrium only
-        r = (rows @ x_new - target) / sigma
+        x_new, ok = jax.vmap(lambda xk, ck: solve(p, xk, ck))(x, cases)
+        ok = jnp.all(ok) & jnp.all(~free | ((p >= lower) & (p <= upper)))
+        r = ((x_new @ rows.T - target) / sigma).reshape(-1)
         return jnp.concatenate([r, smoothing * (u - p0 / unit) * free]), x_new, ok
 
     res = least_squares_run(forward_mode(residuals), p0 / unit, x0, free,
-                            target.shape[0] + p0.shape[0], True, max_iter)
+                            target.size + p0.shape[0], True, max_iter)
     return res._replace(p=res.p * unit, J=res.J / unit)
 
 
@@ -109,11 +113,13 @@ _design_program = jit(_program, static_argnames=("max_iter",))
 
 def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT_N,
                  bounds: dict | None = None, sigma_deg: float = 1.0, smoothing: float = 0.0,
-                 max_iter: int = 80) -> ShapeDesign:
+                 max_iter: int = 80, cases: dict | None = None) -> ShapeDesign:
     """The inputs ``free`` (keys) of a planar scene or rig whose equilibrium's tangent angle
     at ``s`` is ``target_deg`` (module docstring). The scene's values of the free inputs are
     the start; ``bounds``: key -> (lo, hi); ``smoothing`` > 0 pulls the inputs towards the
-    start (relative); ``sigma_deg`` scales the residuals. A target no design reaches
+    start (relative); ``sigma_deg`` scales the residuals. ``cases``: several load cases at
+    once, key -> its K values (e.g. two field directions, {"field.0.angle_deg": [90, 45]}),
+    with one target row per case, ``target_deg`` (K, len(s)). A target no design reaches
     returns ``converged`` True with its ``shape_error_deg`` (the least-squares answer),
     never an error."""
     inner = scene.scene if isinstance(scene, FileScene) else scene
@@ -123,19 +129,21 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
     free = tuple(free)
     if not free or len(set(free)) != len(free):
         raise ParameterError(f"free: one or more distinct inputs, got {free}")
+    case_keys, case_values = _cases(cases, free)
     s = np.asarray(s, float).reshape(-1)
-    target = np.asarray(target_deg, float).reshape(-1)
-    if s.size != target.size or s.size < MIN_POINTS:
-        raise ParameterError(f"target: at least {MIN_POINTS} points (s, tangent_deg), as many "
-                             f"s as angles, got {s.size} and {target.size}")
+    target = np.atleast_2d(np.asarray(target_deg, float))
+    if target.shape != (len(case_values), s.size) or s.size < MIN_POINTS:
+        raise ParameterError(f"target: at least {MIN_POINTS} points (s, tangent_deg), one row "
+                             f"of len(s) = {s.size} angles per load case "
+                             f"({len(case_values)}), got {np.shape(target_deg)}")
     if not (np.all(np.isfinite(s)) and np.all(np.isfinite(target))):
         raise ParameterError("target: s and the angles must be finite (no NaN)")
     if np.any((s < 0.0) | (s > 1.0)):
         raise ParameterError(f"target: s must lie in [0, 1], got {s.min():g} to {s.max():g}")
     check_value("sigma_deg", sigma_deg, lambda v: v > 0, "a number > 0")
     check_value("smoothing", smoothing, lambda v: v >= 0, "a number >= 0")
-    path = along(scene, ("load_scale", *free))
-    p0 = np.asarray(path.start[1:], float)
+    path = along(scene, ("load_scale", *free, *case_keys))
+    p0 = np.asarray(path.start[1:1 + len(free)], float)
     bounds = dict(bounds or {})
     for key in bounds:
         if key not in free:
@@ -145,28 +153,55 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
     if np.any(lower >= upper) or np.any((p0 < lower) | (p0 > upper)):
         raise ParameterError("bounds: each (lo, hi) with lo < hi, holding the scene's value "
                              "(the start)")
-    start = equilibrium(scene, n=n, throw=False)
-    if not start.converged:
-        raise ParameterError(f"scene: its equilibrium at the start did not converge "
-                             f"({start.status.message})")
+    at_case = lambda sc, k: with_values(sc, dict(zip(case_keys, case_values[k])))
+    starts = [equilibrium(at_case(scene, k), n=n, throw=False) for k in range(len(target))]
+    for k, start in enumerate(starts):
+        if not start.converged:
+            raise ParameterError(f"scene: its equilibrium at the start (load case {k}) did "
+                                 f"not converge ({start.status.message})")
     disc = discretise(path.template, n)
     rows = spectral.interpolation_matrix(disc.n, s) @ np.asarray(disc.to_full)
     res = jax.device_get(_design_program(
-        path, disc, jnp.asarray(start.state), jnp.asarray(p0), jnp.ones(p0.size, bool),
-        jnp.asarray(rows), jnp.radians(jnp.asarray(target)), math.radians(sigma_deg),
-        float(smoothing), jnp.asarray(lower), jnp.asarray(upper), max_iter))
+        path, disc, jnp.asarray(np.stack([e.state for e in starts])), jnp.asarray(p0),
+        jnp.ones(p0.size, bool), jnp.asarray(case_values), jnp.asarray(rows),
+        jnp.radians(jnp.asarray(target)), math.radians(sigma_deg), float(smoothing),
+        jnp.asarray(lower), jnp.asarray(upper), max_iter))
     values = dict(zip(free, (float(v) for v in res.p)))
     designed = with_values(scene, values)
     x = np.asarray(res.aux)
-    tangent = np.degrees(rows @ x)
-    eig = float(np.linalg.eigvalsh(np.asarray(MODEL.hessian(
-        jnp.asarray(x), 0.0, (path, disc, 1.0, 1.0, jnp.asarray(res.p)))))[0])
-    ramped = equilibrium(designed, n=n, throw=False)
-    reachable = bool(ramped.converged) and float(np.max(np.abs(ramped.state - x))) <= 1e-8
+    tangent = np.degrees(x @ rows.T)
+    eig = min(float(np.linalg.eigvalsh(np.asarray(MODEL.hessian(
+        jnp.asarray(x[k]), 0.0, (path, disc, 1.0, 1.0,
+                                 jnp.concatenate([res.p, case_values[k]])))))[0])
+        for k in range(len(x)))
+    reachable = True
+    for k in range(len(x)):
+        ramped = equilibrium(at_case(designed, k), n=n, throw=False)
+        reachable &= bool(ramped.converged) and float(np.max(np.abs(ramped.state - x[k]))) \
+            <= 1e-8
     converged = bool(res.converged) and bool(res.ok)
-    return ShapeDesign(values=values, s=s, target_deg=target, tangent_deg=tangent,
+    one = (lambda a: a[0]) if cases is None else (lambda a: a)
+    return ShapeDesign(values=values, s=s, target_deg=one(target), tangent_deg=one(tangent),
                        shape_error_deg=float(np.max(np.abs(tangent - target))),
                        stable=eig > 0.0, smallest_eigenvalue=eig, reachable=reachable,
                        converged=converged, iterations=int(res.iterations),
                        status=Status.SUCCESS if converged else Status.NOT_CONVERGED,
-                       scene=designed, state=x)
+                       scene=designed, state=one(x))
+
+
+def _cases(cases: dict | None, free) -> tuple[tuple, np.ndarray]:
+    """(the load cases' keys, their values (K, keys)); one case of no keys without cases."""
+    if cases is None:
+        return (), np.zeros((1, 0))
+    keys = tuple(cases)
+    counts = {len(np.atleast_1d(cases[k])) for k in keys}
+    if not keys or len(counts) != 1 or min(counts) < 1:
+        raise ParameterError("cases: key -> its values, one per load case, as many for every "
+                             f"key, got {cases!r:.80}")
+    for key in keys:
+        if key in free:
+            raise ParameterError(f"cases: {key} is free; a load case's inputs are given")
+    values = np.array([np.atleast_1d(np.asarray(cases[k], float)) for k in keys]).T
+    if not np.all(np.isfinite(values)):
+        raise ParameterError("cases: the load cases' values must be finite")
+    return keys, values
