@@ -142,3 +142,14 @@ def test_fold_map_against_folds_quick(tmp_path):
     result = run_quick("fold_map_against_folds.py", tmp_path)
     assert result["sets"] == 100 and result["disagreements"] == 0, result["rows"]
     assert result["bistable_sets"] > 0
+
+
+def test_design_against_ga_quick(tmp_path):
+    """The shape design's peers on one problem: every method reaches the target's shape
+    (jaxrod and the finite-difference least squares to 1e-8 degrees), jaxrod in fewer
+    evaluations of the forward model than either."""
+    (problem,) = run_quick("design_against_ga.py", tmp_path)["problems"]
+    ours, fd, ga = problem["rows"]
+    assert ours["converged"] and ours["shape_error_deg"] <= 1e-8
+    assert fd["shape_error_deg"] <= 1e-8
+    assert ours["evaluations"] < fd["evaluations"] < ga["evaluations"]
