@@ -199,3 +199,23 @@ def test_one_profile_for_two_target_shapes_under_two_fields(tmp_path):
     assert d.converged and d.stable and d.reachable and d.tangent_deg.shape == (2, S.size)
     assert d.shape_error_deg <= 1e-6
     np.testing.assert_allclose([d.values[k] for k in keys], [1.0, 0.3], rtol=0, atol=1e-7)
+
+
+def test_a_magnet_placed_for_a_target_shape(tmp_path):
+    """A dipole's field: the shape of the rod under a magnet at (0.6, 1.3) rod lengths (by
+    jaxrod at N = 16) is the target; from (0.5, 1.4) the design finds the magnet's position
+    to 1e-8, and ramping the designed rig's magnet up reaches the designed equilibrium."""
+    from jaxrod import spectral
+
+    rig = tmp_path / "dipole.toml"
+    rig.write_text(RIG.replace('kind = "uniform"\nload = 2.0\nangle_deg = 90.0',
+                               'kind = "dipole"\nM = 0.5\nposition = [0.6, 1.3]\n'
+                               'moment_direction = [0.0, 1.0]').format(magnetisation=""))
+    shape = jr.equilibrium(jr.load_scene(str(rig)), n=16).state
+    s = S[::2]
+    rows = spectral.interpolation_matrix(16, s) @ np.asarray(jr.planar_discretisation(16).to_full)
+    keys = ["field.0.position.0", "field.0.position.1"]
+    start = jr.load_scene(str(rig), [f"{keys[0]}=0.5", f"{keys[1]}=1.4"])
+    d = design_shape(start, keys, s, np.degrees(rows @ shape), n=16)
+    assert d.converged and d.stable and d.reachable
+    np.testing.assert_allclose([d.values[k] for k in keys], [0.6, 1.3], rtol=0, atol=1e-8)

@@ -131,7 +131,7 @@ def with_values(scene, values: dict):
     return scene
 
 
-def _magnets(scene, keys, start) -> dict:
+def magnet_margins(scene, keys, start) -> dict:
     """term name -> (the magnet's radius in rod lengths at ``start``, its exponents in the
     keys): a rig's magnet radius d / (2 L) moves with the rig's numbers; a scene's magnets
     are points."""
@@ -240,7 +240,7 @@ def _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n, readout,
                   sign=jnp.asarray(readout[:, 1]), prior_mean=jnp.asarray(mean),
                   prior_scale=jnp.asarray(scale * free_mask), lower=jnp.asarray(lower),
                   upper=jnp.asarray(upper), magnets=_remembered(
-                      ("magnets", here, keys), lambda: _magnets(scene, keys, p0)))
+                      ("magnets", here, keys), lambda: magnet_margins(scene, keys, p0)))
     if z0 is None:
         if ahead is not None:  # the fit's program compiles while the folds are found
             states = jax.ShapeDtypeStruct((n_folds, 2 * disc.size + 1), jnp.float64)

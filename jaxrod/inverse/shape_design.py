@@ -10,8 +10,9 @@ where theta(.; p) is the equilibrium grad E(x; p) = 0 continued from the last ac
 by Newton, differentiated implicitly (dx/dp = -H^-1 d(grad E)/dp: exact gradients, never
 finite differences), with the least squares of ``jaxrod.solvers.least_squares`` (L-BFGS
 directions in Gauss-Newton scaling, Armijo line search; one compiled program for every
-target of the scene's structure). Bounds, and an unstable equilibrium (the Hessian not
-positive definite: a design the rod would snap away from), reject a trial point. The answer is
+target of the scene's structure). Bounds, a magnet within the rod's reach, and an unstable
+equilibrium (the Hessian not positive definite: a design the rod would snap away from)
+reject a trial point. The answer is
 checked: the Hessian's smallest eigenvalue (``stable``) and the equilibrium reached by
 ramping the loads of the designed scene from zero (``jaxrod.equilibrium``): ``reachable``
 where it is the designed one.
@@ -32,7 +33,7 @@ import numpy as np
 
 from jaxrod import spectral
 from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise, equilibrium
-from jaxrod.inverse.scene_fit import with_values
+from jaxrod.inverse.scene_fit import magnet_margins, with_values
 from jaxrod.params import ParameterError, check_value
 from jaxrod.programs import jit
 from jaxrod.scenes.files import FileScene
@@ -80,21 +81,33 @@ class ShapeDesign:
 
 
 def _program(path, disc, x0, p0, free, cases, rows, target, sigma, smoothing, lower, upper,
-             max_iter):
+             magnets, max_iter):
     """The least squares over p (the path's inputs after the load scale, scaled by |p0|)
     from the equilibria x0 (K, m) of the K load cases at p0: case k sets the path's last
-    inputs to ``cases[k]``; target (K, points)."""
+    inputs to ``cases[k]``; target (K, points); ``magnets``: term name -> (its radius in
+    rod lengths at the start, its exponents in the path's inputs)."""
     unit = jnp.where(p0 == 0.0, 1.0, jnp.abs(p0))
+    start = jnp.concatenate([p0, cases[0]])
+
+    def clear(q):
+        """Every magnet beyond the rod's reach at the inputs q (free, then the case's)."""
+        scene = path.at(jnp.concatenate([jnp.ones(1), q]))
+        safe = jnp.where(start == 0.0, 1.0, start)
+        gaps = [jnp.linalg.norm(scene.terms[t].centre()) - 1.0
+                - margin * jnp.prod(jnp.where(k == 0, 1.0, (q / safe) ** k))
+                for t, (margin, k) in magnets.items()]
+        return jnp.all(jnp.stack(gaps) > 0.0) if gaps else jnp.asarray(True)
 
     def args(p, case):
         return (path, disc, 1.0, 1.0, jnp.concatenate([p, case]))
 
     def solve(p, x, case):
+        ok = clear(jnp.concatenate([p, case]))
         x_new, stats = implicit_newton(
             lambda y, q: MODEL.gradient(y, 0.0, args(q, case)), x, p, tol=1e-12,
             jacobian=lambda y, q: MODEL.hessian(y, 0.0, args(q, case)))
         stable = jnp.linalg.eigvalsh(MODEL.hessian(x_new, 0.0, args(p, case)))[0] > 0.0
-        return x_new, (stats[0] == 1.0) & stable  # a stable equilibrium only
+        return x_new, ok & (stats[0] == 1.0) & stable  # a stable equilibrium only
 
     def residuals(u, x):
         p = u * unit
@@ -165,7 +178,8 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
         path, disc, jnp.asarray(np.stack([e.state for e in starts])), jnp.asarray(p0),
         jnp.ones(p0.size, bool), jnp.asarray(case_values), jnp.asarray(rows),
         jnp.radians(jnp.asarray(target)), math.radians(sigma_deg), float(smoothing),
-        jnp.asarray(lower), jnp.asarray(upper), max_iter))
+        jnp.asarray(lower), jnp.asarray(upper),
+        magnet_margins(scene, free + case_keys, np.r_[p0, case_values[0]]), max_iter))
     values = dict(zip(free, (float(v) for v in res.p)))
     designed = with_values(scene, values)
     x = np.asarray(res.aux)
