@@ -219,3 +219,21 @@ def test_a_magnet_placed_for_a_target_shape(tmp_path):
     d = design_shape(start, keys, s, np.degrees(rows @ shape), n=16)
     assert d.converged and d.stable and d.reachable
     np.testing.assert_allclose([d.values[k] for k in keys], [0.6, 1.3], rtol=0, atol=1e-8)
+
+
+def test_a_stability_margin_the_free_design_violates(tmp_path):
+    """The strength profile for the target (six coefficients) holds the rod with the
+    Hessian's smallest eigenvalue 0.15; asking 0.3 trades shape for stability: the margin
+    met to its tolerance (a penalty that binds), the shape missed, still reached by the
+    ramp. One compiled program for both (the margin is traced)."""
+    from jaxrod.inverse.shape_design import MARGIN_TOLERANCE
+
+    K = 6
+    rig = _rig(tmp_path, f"strength_profile = {[1.0] + [0.0] * (K - 1)}")
+    keys = [f"magnetisation.strength_profile.{k}" for k in range(K)]
+    free = design_shape(rig, keys, S, TARGET_DEG, n=16)
+    assert free.converged and free.shape_error_deg <= 1e-5 and free.smallest_eigenvalue < 0.3
+    held = design_shape(rig, keys, S, TARGET_DEG, n=16, margin=0.3)
+    assert held.converged and held.margin_met and held.reachable
+    assert abs(held.smallest_eigenvalue - 0.3) <= MARGIN_TOLERANCE * 0.3
+    assert held.shape_error_deg > 1.0

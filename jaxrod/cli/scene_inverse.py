@@ -34,6 +34,9 @@ def add_design_scene_options(de) -> None:
     de.add_argument("--target-shape", default=None, metavar="FILE.csv",
                     help="scene file: design for a target shape, a CSV with header "
                     "s,tangent_deg (the tangent angle from +z toward +x at s in [0, 1])")
+    de.add_argument("--margin", type=_float("margin"), default=0.0,
+                    help="a shape design's stability margin: the Hessian's smallest "
+                    "eigenvalue to keep (default 0: stable)")
     de.add_argument("--out", default=None, help="directory for design.json and shape.png "
                     "(a shape design)")
 

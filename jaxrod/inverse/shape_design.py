@@ -45,6 +45,11 @@ from jaxrod.status import Status
 
 #: Fewest target points.
 MIN_POINTS = 3
+#: The stability margin's penalty: a residual MARGIN_WEIGHT (margin - lambda_min) where the
+#: Hessian's smallest eigenvalue falls short of it (beside residuals in units of sigma).
+MARGIN_WEIGHT = 1e4
+#: A margin that binds is met to this, relative (the penalty leaves ~1e-5 of it).
+MARGIN_TOLERANCE = 1e-4
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,7 +57,8 @@ class ShapeDesign:
     """A design for a target shape: ``values`` (key -> value of each free input),
     ``tangent_deg`` the designed equilibrium's tangent angle at the target's ``s``,
     ``shape_error_deg`` its largest difference from the target, ``stable`` (the Hessian's
-    smallest eigenvalue ``smallest_eigenvalue`` > 0), ``reachable`` (ramping the designed
+    smallest eigenvalue ``smallest_eigenvalue`` > 0; ``margin_met``: at least the margin
+    asked), ``reachable`` (ramping the designed
     scene's loads from zero reaches this equilibrium, to 1e-8 rad), ``converged`` (the least
     squares converged and the equilibrium solves did), ``iterations``, ``status``,
     ``scene`` the designed scene (or rig) and ``state`` its equilibrium."""
@@ -65,6 +71,7 @@ class ShapeDesign:
     stable: bool
     smallest_eigenvalue: float
     reachable: bool
+    margin_met: bool
     converged: bool
     iterations: int
     status: Status
@@ -76,12 +83,13 @@ class ShapeDesign:
                 "target_deg": self.target_deg.tolist(), "tangent_deg": self.tangent_deg.tolist(),
                 "shape_error_deg": self.shape_error_deg, "stable": self.stable,
                 "smallest_eigenvalue": self.smallest_eigenvalue, "reachable": self.reachable,
+                "margin_met": self.margin_met,
                 "converged": self.converged, "iterations": self.iterations,
                 "status": self.status.name.lower()}
 
 
 def _program(path, disc, x0, p0, free, cases, rows, target, sigma, smoothing, lower, upper,
-             magnets, max_iter):
+             magnets, margin, max_iter):
     """The least squares over p (the path's inputs after the load scale, scaled by |p0|)
     from the equilibria x0 (K, m) of the K load cases at p0: case k sets the path's last
     inputs to ``cases[k]``; target (K, points); ``magnets``: term name -> (its radius in
@@ -106,18 +114,19 @@ def _program(path, disc, x0, p0, free, cases, rows, target, sigma, smoothing, lo
         x_new, stats = implicit_newton(
             lambda y, q: MODEL.gradient(y, 0.0, args(q, case)), x, p, tol=1e-12,
             jacobian=lambda y, q: MODEL.hessian(y, 0.0, args(q, case)))
-        stable = jnp.linalg.eigvalsh(MODEL.hessian(x_new, 0.0, args(p, case)))[0] > 0.0
-        return x_new, ok & (stats[0] == 1.0) & stable  # a stable equilibrium only
+        smallest = jnp.linalg.eigvalsh(MODEL.hessian(x_new, 0.0, args(p, case)))[0]
+        return x_new, ok & (stats[0] == 1.0) & (smallest > 0.0), smallest  # stable only
 
     def residuals(u, x):
         p = u * unit
-        x_new, ok = jax.vmap(lambda xk, ck: solve(p, xk, ck))(x, cases)
+        x_new, ok, smallest = jax.vmap(lambda xk, ck: solve(p, xk, ck))(x, cases)
         ok = jnp.all(ok) & jnp.all(~free | ((p >= lower) & (p <= upper)))
         r = ((x_new @ rows.T - target) / sigma).reshape(-1)
-        return jnp.concatenate([r, smoothing * (u - p0 / unit) * free]), x_new, ok
+        short = MARGIN_WEIGHT * jnp.maximum(margin - smallest, 0.0) * (margin > 0.0)
+        return jnp.concatenate([r, short, smoothing * (u - p0 / unit) * free]), x_new, ok
 
     res = least_squares_run(forward_mode(residuals), p0 / unit, x0, free,
-                            target.size + p0.shape[0], True, max_iter)
+                            target.size + cases.shape[0] + p0.shape[0], True, max_iter)
     return res._replace(p=res.p * unit, J=res.J / unit)
 
 
@@ -126,13 +135,17 @@ _design_program = jit(_program, static_argnames=("max_iter",))
 
 def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT_N,
                  bounds: dict | None = None, sigma_deg: float = 1.0, smoothing: float = 0.0,
-                 max_iter: int = 80, cases: dict | None = None) -> ShapeDesign:
+                 max_iter: int = 80, cases: dict | None = None,
+                 margin: float = 0.0) -> ShapeDesign:
     """The inputs ``free`` (keys) of a planar scene or rig whose equilibrium's tangent angle
     at ``s`` is ``target_deg`` (module docstring). The scene's values of the free inputs are
     the start; ``bounds``: key -> (lo, hi); ``smoothing`` > 0 pulls the inputs towards the
     start (relative); ``sigma_deg`` scales the residuals. ``cases``: several load cases at
     once, key -> its K values (e.g. two field directions, {"field.0.angle_deg": [90, 45]}),
-    with one target row per case, ``target_deg`` (K, len(s)). A target no design reaches
+    with one target row per case, ``target_deg`` (K, len(s)). ``margin`` > 0: a stability
+    margin, the Hessian's smallest eigenvalue at least ``margin`` in every case (a penalty
+    ``MARGIN_WEIGHT`` (margin - lambda_min) where it falls short; ``margin_met`` says
+    whether it holds to ``MARGIN_TOLERANCE`` of it). A target no design reaches
     returns ``converged`` True with its ``shape_error_deg`` (the least-squares answer),
     never an error."""
     inner = scene.scene if isinstance(scene, FileScene) else scene
@@ -155,6 +168,8 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
         raise ParameterError(f"target: s must lie in [0, 1], got {s.min():g} to {s.max():g}")
     check_value("sigma_deg", sigma_deg, lambda v: v > 0, "a number > 0")
     check_value("smoothing", smoothing, lambda v: v >= 0, "a number >= 0")
+    check_value("margin", margin, lambda v: v >= 0, "a number >= 0 (the Hessian's smallest "
+                "eigenvalue to keep)")
     path = along(scene, ("load_scale", *free, *case_keys))
     p0 = np.asarray(path.start[1:1 + len(free)], float)
     bounds = dict(bounds or {})
@@ -179,7 +194,8 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
         jnp.ones(p0.size, bool), jnp.asarray(case_values), jnp.asarray(rows),
         jnp.radians(jnp.asarray(target)), math.radians(sigma_deg), float(smoothing),
         jnp.asarray(lower), jnp.asarray(upper),
-        magnet_margins(scene, free + case_keys, np.r_[p0, case_values[0]]), max_iter))
+        magnet_margins(scene, free + case_keys, np.r_[p0, case_values[0]]), float(margin),
+        max_iter))
     values = dict(zip(free, (float(v) for v in res.p)))
     designed = with_values(scene, values)
     x = np.asarray(res.aux)
@@ -198,6 +214,7 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
     return ShapeDesign(values=values, s=s, target_deg=one(target), tangent_deg=one(tangent),
                        shape_error_deg=float(np.max(np.abs(tangent - target))),
                        stable=eig > 0.0, smallest_eigenvalue=eig, reachable=reachable,
+                       margin_met=eig >= margin * (1.0 - MARGIN_TOLERANCE),
                        converged=converged, iterations=int(res.iterations),
                        status=Status.SUCCESS if converged else Status.NOT_CONVERGED,
                        scene=designed, state=one(x))
