@@ -237,3 +237,25 @@ def test_a_stability_margin_the_free_design_violates(tmp_path):
     assert held.converged and held.margin_met and held.reachable
     assert abs(held.smallest_eigenvalue - 0.3) <= MARGIN_TOLERANCE * 0.3
     assert held.shape_error_deg > 1.0
+
+
+def test_bounds_on_a_profile_that_must_change_sign(tmp_path):
+    """theta*(s) = 0.2 (s - s^2 / 2) + 1.2 (s^3 / 3 - s^4 / 4) curves back (theta*'' > 0 near
+    s = 1/3): its remanence mu = -theta*'' / (load cos theta*) changes sign. Free, the design
+    reaches it with mu < 0 there; bounded to mu(s) in [0, 10] (the profile's values at 101
+    points), it keeps mu >= 0 and says that the target is not reached at its bounds."""
+    K = 8
+    rig = _rig(tmp_path, f"strength_profile = {[1.0] + [0.0] * (K - 1)}")
+    keys = [f"magnetisation.strength_profile.{k}" for k in range(K)]
+    target = np.degrees(0.2 * (S - S**2 / 2) + 1.2 * (S**3 / 3 - S**4 / 4))
+    s = np.linspace(0.0, 1.0, 101)
+    mu = lambda d: np.polynomial.chebyshev.chebval(2 * s - 1, [d.values[k] for k in keys])
+    free = design_shape(rig, keys, S, target, n=16)
+    assert free.converged and free.reached and mu(free).min() < -0.05
+    held = design_shape(rig, keys, S, target, n=16,
+                        bounds={"magnetisation.strength_profile": (0.0, 10.0)})
+    assert not held.reached and held.shape_error_deg > 1.0 and mu(held).min() >= 0.0
+    assert "not reached" in held.reason and "bounds" in held.reason
+    with pytest.raises(ParameterError, match="bounds"):
+        design_shape(rig, keys[1:], S, target, n=16,
+                     bounds={"magnetisation.strength_profile": (0.0, 10.0)})

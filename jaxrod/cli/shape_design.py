@@ -72,7 +72,7 @@ def shape_on_file(args) -> int:
     if not items:
         raise ParameterError("free: name the inputs to solve for (--free KEY, repeatable)")
     keys = free_keys(file, items)
-    bounds = bounds_of(args, keys)
+    bounds = bounds_of(args, keys + items)  # a list's key bounds its profile's values
     d = design_shape(file, keys, s, target, n=args.n, bounds=bounds, margin=args.margin)
     out = {"rig": args.rig, "free": keys, **d.as_dict(),
            "profile": _profile(d.scene, np.linspace(0.0, 1.0, 101))}
@@ -90,6 +90,8 @@ def shape_on_file(args) -> int:
         if args.margin > 0.0:
             print(f"smallest Hessian eigenvalue {d.smallest_eigenvalue:.6g}: the margin "
                   f"{args.margin:g} {'met' if d.margin_met else 'NOT met'}")
+        if d.reason:
+            print(d.reason)
         print(f"shape error {d.shape_error_deg:.3g} deg; {'stable' if d.stable else 'UNSTABLE'}"
               f"; {'reached' if d.reachable else 'NOT reached'} by ramping the loads; "
               f"converged: {d.converged}")

@@ -58,7 +58,9 @@ class ShapeDesign:
     ``tangent_deg`` the designed equilibrium's tangent angle at the target's ``s``,
     ``shape_error_deg`` its largest difference from the target, ``stable`` (the Hessian's
     smallest eigenvalue ``smallest_eigenvalue`` > 0; ``margin_met``: at least the margin
-    asked), ``reachable`` (ramping the designed
+    asked), ``reached`` (the shape within ``REACHED`` sigma of the target: else the bounds,
+    the margin or the basis keep the design from it, said in ``reason``), ``reachable``
+    (ramping the designed
     scene's loads from zero reaches this equilibrium, to 1e-8 rad), ``converged`` (the least
     squares converged and the equilibrium solves did), ``iterations``, ``status``,
     ``scene`` the designed scene (or rig) and ``state`` its equilibrium."""
@@ -72,28 +74,31 @@ class ShapeDesign:
     smallest_eigenvalue: float
     reachable: bool
     margin_met: bool
+    reached: bool
     converged: bool
     iterations: int
     status: Status
     scene: object
     state: np.ndarray
+    reason: str = ""
 
     def as_dict(self) -> dict:
         return {"values": self.values, "s": self.s.tolist(),
                 "target_deg": self.target_deg.tolist(), "tangent_deg": self.tangent_deg.tolist(),
                 "shape_error_deg": self.shape_error_deg, "stable": self.stable,
                 "smallest_eigenvalue": self.smallest_eigenvalue, "reachable": self.reachable,
-                "margin_met": self.margin_met,
+                "margin_met": self.margin_met, "reached": self.reached, "reason": self.reason,
                 "converged": self.converged, "iterations": self.iterations,
                 "status": self.status.name.lower()}
 
 
-def _program(path, disc, x0, p0, free, cases, rows, target, sigma, smoothing, lower, upper,
+def _program(path, disc, x0, p0, free, cases, rows, target, sigma, smoothing, limits,
              magnets, margin, max_iter):
     """The least squares over p (the path's inputs after the load scale, scaled by |p0|)
     from the equilibria x0 (K, m) of the K load cases at p0: case k sets the path's last
-    inputs to ``cases[k]``; target (K, points); ``magnets``: term name -> (its radius in
-    rod lengths at the start, its exponents in the path's inputs)."""
+    inputs to ``cases[k]``; target (K, points); limits = (A, lo, hi): lo <= A p <= hi (the
+    bounds of inputs and of profiles' values); ``magnets``: term name -> (its radius in rod
+    lengths at the start, its exponents in the path's inputs)."""
     unit = jnp.where(p0 == 0.0, 1.0, jnp.abs(p0))
     start = jnp.concatenate([p0, cases[0]])
 
@@ -120,7 +125,8 @@ def _program(path, disc, x0, p0, free, cases, rows, target, sigma, smoothing, lo
     def residuals(u, x):
         p = u * unit
         x_new, ok, smallest = jax.vmap(lambda xk, ck: solve(p, xk, ck))(x, cases)
-        ok = jnp.all(ok) & jnp.all(~free | ((p >= lower) & (p <= upper)))
+        A, lo, hi = limits
+        ok = jnp.all(ok) & jnp.all((A @ p >= lo) & (A @ p <= hi))
         r = ((x_new @ rows.T - target) / sigma).reshape(-1)
         short = MARGIN_WEIGHT * jnp.maximum(margin - smallest, 0.0) * (margin > 0.0)
         return jnp.concatenate([r, short, smoothing * (u - p0 / unit) * free]), x_new, ok
@@ -139,7 +145,9 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
                  margin: float = 0.0) -> ShapeDesign:
     """The inputs ``free`` (keys) of a planar scene or rig whose equilibrium's tangent angle
     at ``s`` is ``target_deg`` (module docstring). The scene's values of the free inputs are
-    the start; ``bounds``: key -> (lo, hi); ``smoothing`` > 0 pulls the inputs towards the
+    the start; ``bounds``: key -> (lo, hi), an input's, or a profile's values along s by its
+    list's key (``magnetisation.strength_profile``: mu(s), at 101 points; every coefficient
+    free); ``smoothing`` > 0 pulls the inputs towards the
     start (relative); ``sigma_deg`` scales the residuals. ``cases``: several load cases at
     once, key -> its K values (e.g. two field directions, {"field.0.angle_deg": [90, 45]}),
     with one target row per case, ``target_deg`` (K, len(s)). ``margin`` > 0: a stability
@@ -172,15 +180,7 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
                 "eigenvalue to keep)")
     path = along(scene, ("load_scale", *free, *case_keys))
     p0 = np.asarray(path.start[1:1 + len(free)], float)
-    bounds = dict(bounds or {})
-    for key in bounds:
-        if key not in free:
-            raise ParameterError(f"bounds: {key!r} is not free ({', '.join(free)})")
-    lower = np.array([bounds.get(k, (-np.inf, np.inf))[0] for k in free], float)
-    upper = np.array([bounds.get(k, (-np.inf, np.inf))[1] for k in free], float)
-    if np.any(lower >= upper) or np.any((p0 < lower) | (p0 > upper)):
-        raise ParameterError("bounds: each (lo, hi) with lo < hi, holding the scene's value "
-                             "(the start)")
+    limits = _limits(dict(bounds or {}), free, p0)
     at_case = lambda sc, k: with_values(sc, dict(zip(case_keys, case_values[k])))
     starts = [equilibrium(at_case(scene, k), n=n, throw=False) for k in range(len(target))]
     for k, start in enumerate(starts):
@@ -193,7 +193,7 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
         path, disc, jnp.asarray(np.stack([e.state for e in starts])), jnp.asarray(p0),
         jnp.ones(p0.size, bool), jnp.asarray(case_values), jnp.asarray(rows),
         jnp.radians(jnp.asarray(target)), math.radians(sigma_deg), float(smoothing),
-        jnp.asarray(lower), jnp.asarray(upper),
+        tuple(jnp.asarray(v) for v in limits),
         magnet_margins(scene, free + case_keys, np.r_[p0, case_values[0]]), float(margin),
         max_iter))
     values = dict(zip(free, (float(v) for v in res.p)))
@@ -211,13 +211,72 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
             <= 1e-8
     converged = bool(res.converged) and bool(res.ok)
     one = (lambda a: a[0]) if cases is None else (lambda a: a)
+    error = float(np.max(np.abs(tangent - target)))
+    reached = error <= REACHED * sigma_deg
+    A, lo, hi = limits
+    held = A @ np.asarray(res.p)
+    # the line search rejects points beyond a bound: it stops short of it by its last step
+    at_bound = bool(np.any(np.minimum(held - lo, hi - held)
+                           <= 1e-3 * np.maximum(1.0, np.abs(held))))
+    reason = "" if reached else (
+        f"the target is not reached: the largest shape error is {error:.3g} deg ("
+        + ("the design stops at its bounds" if at_bound else
+           "the margin or the profiles' degree keep the design from it") + ")")
     return ShapeDesign(values=values, s=s, target_deg=one(target), tangent_deg=one(tangent),
-                       shape_error_deg=float(np.max(np.abs(tangent - target))),
+                       shape_error_deg=error, reached=reached, reason=reason,
                        stable=eig > 0.0, smallest_eigenvalue=eig, reachable=reachable,
                        margin_met=eig >= margin * (1.0 - MARGIN_TOLERANCE),
                        converged=converged, iterations=int(res.iterations),
                        status=Status.SUCCESS if converged else Status.NOT_CONVERGED,
                        scene=designed, state=one(x))
+
+
+#: A shape within this many sigma of the target everywhere is reached.
+REACHED = 1e-6
+
+
+#: A profile's basis by its list's key: Chebyshev in 2 s - 1, or powers of s (degrees).
+PROFILES = {"magnetisation.strength_profile": "chebyshev", "rod.stiffness_profile":
+            "chebyshev", "magnetisation.profile_deg": "powers"}
+
+
+def _limits(bounds: dict, free, p0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A, lo, hi) with lo <= A p <= hi: a free input's bounds a row of the identity, a
+    profile's bounds its basis at 101 points of s times its free coefficients."""
+    rows, lo, hi = [], [], []
+    for key, pair in bounds.items():
+        try:
+            a, b = (float(v) for v in pair)
+        except (TypeError, ValueError):
+            raise ParameterError(f"bounds {key}: a pair (lo, hi), got {pair!r:.60}") from None
+        if not a < b:
+            raise ParameterError(f"bounds {key}: lo < hi, got ({a:g}, {b:g})")
+        if key in free:
+            rows.append(np.eye(len(free))[free.index(key)][None])
+        elif key in PROFILES:
+            idx = [i for i, k in enumerate(free) if k.startswith(key + ".")]
+            if not idx:
+                raise ParameterError(f"bounds {key}: free its coefficients ({key}.0, ...)")
+            order = [int(free[i].rsplit(".", 1)[1]) for i in idx]
+            if sorted(order) != list(range(len(order))):
+                raise ParameterError(f"bounds {key}: bounds on the profile's values need all "
+                                     f"its coefficients free ({key}.0 to .{len(order) - 1})")
+            s = np.linspace(0.0, 1.0, 101)
+            basis = (np.polynomial.chebyshev.chebvander(2 * s - 1, len(idx) - 1)
+                     if PROFILES[key] == "chebyshev" else np.vander(s, len(idx), True))
+            block = np.zeros((s.size, len(free)))
+            block[:, idx] = basis[:, order]
+            rows.append(block)
+        else:
+            raise ParameterError(f"bounds: {key!r} is not free ({', '.join(free)}) nor a "
+                                 f"profile of free coefficients ({', '.join(PROFILES)})")
+        lo += [a] * len(rows[-1])
+        hi += [b] * len(rows[-1])
+    A = np.concatenate(rows) if rows else np.zeros((0, len(free)))
+    lo, hi = np.array(lo, float), np.array(hi, float)
+    if np.any(A @ p0 < lo) or np.any(A @ p0 > hi):
+        raise ParameterError("bounds: the start (the scene's values) lies outside them")
+    return A, lo, hi
 
 
 def _cases(cases: dict | None, free) -> tuple[tuple, np.ndarray]:
