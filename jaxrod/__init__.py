@@ -65,6 +65,7 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "load_scene": ("jaxrod.scenes.files", "load"),
         "term": ("jaxrod.scenes.terms", "term"),
         "Bending": ("jaxrod.scenes.terms", "Bending"),
+        "TaperedBending": ("jaxrod.scenes.terms", "TaperedBending"),
         "Gravity": ("jaxrod.scenes.terms", "Gravity"),
         "Anisotropy": ("jaxrod.scenes.terms", "Anisotropy"),
         "Dipole": ("jaxrod.scenes.terms", "Dipole"),
