@@ -171,6 +171,17 @@ class ChebyshevGrid:
         return self.diff @ f
 
 
+def chebyshev_series(coefficients, s):
+    """sum_k c_k T_k(2 s - 1) at s in [0, 1] by Clenshaw's recurrence (traceable in the
+    coefficients; the profiles' basis, ``jaxrod.scenes.terms``: [1] is the constant 1)."""
+    c = jnp.asarray(coefficients)
+    x = 2.0 * s - 1.0
+    b1 = b2 = jnp.zeros_like(x)
+    for d in c[:0:-1]:
+        b1, b2 = d + 2.0 * x * b1 - b2, b1
+    return c[0] + x * b1 - b2
+
+
 @lru_cache(maxsize=64)
 def _grid_arrays(n: int):
     return (

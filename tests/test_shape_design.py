@@ -259,3 +259,15 @@ def test_bounds_on_a_profile_that_must_change_sign(tmp_path):
     with pytest.raises(ParameterError, match="bounds"):
         design_shape(rig, keys[1:], S, target, n=16,
                      bounds={"magnetisation.strength_profile": (0.0, 10.0)})
+
+
+def test_a_design_at_too_small_a_degree_says_so(tmp_path):
+    """At N = 4 the designed equilibrium's Chebyshev tail is far above 1e-8 rad: the design
+    converges but its status is UNDER_RESOLVED (at N = 16 the same design is a success)."""
+    rig = _rig(tmp_path, "strength_profile = [1.0, 0.0]")
+    keys = ["magnetisation.strength_profile.0", "magnetisation.strength_profile.1"]
+    coarse = design_shape(rig, keys, S, TARGET_DEG, n=4)
+    assert coarse.converged and coarse.error_estimate > 1e-8
+    assert coarse.status is jr.Status.UNDER_RESOLVED and not coarse.status.ok
+    fine = design_shape(rig, keys, S, TARGET_DEG, n=16)
+    assert fine.status is jr.Status.SUCCESS and fine.error_estimate <= 1e-8

@@ -39,17 +39,15 @@ def read_target(path: str) -> tuple[np.ndarray, np.ndarray]:
 
 def free_keys(file, keys) -> list[str]:
     """The free keys, a list's key (``magnetisation.strength_profile``) expanded to its
-    coefficients' keys."""
+    coefficients' keys (the file's numbers below it, ``jaxrod.scenes.path.numeric_keys``)."""
+    from jaxrod.scenes.path import numeric_keys
+
+    numbers = numeric_keys(file.data)
     out = []
     for key in keys:
-        entry = file.data
-        for part in key.split("."):
-            entry = entry.get(part) if isinstance(entry, dict) else None
-        if isinstance(entry, list) and entry and all(isinstance(v, (int, float))
-                                                     for v in entry):
-            out += [f"{key}.{k}" for k in range(len(entry))]
-        else:
-            out.append(key)
+        below = [k for k in numbers if k.startswith(key + ".") and
+                 k[len(key) + 1:].isdigit()]
+        out += below or [key]
     return out
 
 
@@ -92,10 +90,12 @@ def shape_on_file(args) -> int:
                   f"{args.margin:g} {'met' if d.margin_met else 'NOT met'}")
         if d.reason:
             print(d.reason)
+        if not d.status.ok:
+            print(d.status.message)
         print(f"shape error {d.shape_error_deg:.3g} deg; {'stable' if d.stable else 'UNSTABLE'}"
               f"; {'reached' if d.reachable else 'NOT reached'} by ramping the loads; "
               f"converged: {d.converged}")
-    return 0 if d.converged else 1
+    return 0 if d.status.ok and d.reached else 1
 
 
 def _figure(path, d, profile) -> None:

@@ -260,8 +260,9 @@ def fold_function(scene: Scene | FileScene, vary: str, vary_range: tuple[float, 
     are implicitly differentiable (d lam / dp = -(dR/dz)^-1 dR/dp at the solution), so
     ``jax.grad``, ``jax.jacfwd`` and ``jax.vmap`` apply; one compiled program for every
     function of a scene's structure and N. ``converged`` is False where Newton did not reach
-    a fold from p0's (p too far from p0: take steps). The generic form of the paper's
-    ``fold_angles``."""
+    a fold from p0's or reached one outside ``vary_range`` (p too far from p0: take steps);
+    far from p0 Newton may also land on another of the scene's folds inside the range,
+    which nothing here detects. The generic form of the paper's ``fold_angles``."""
     start, stop = check_range(scene, vary, *vary_range)
     inputs = tuple(inputs)
     if not inputs or vary in inputs or len(set(inputs)) != len(inputs):
@@ -277,8 +278,9 @@ def fold_function(scene: Scene | FileScene, vary: str, vary_range: tuple[float, 
     z0, p0 = jnp.asarray(z0), np.asarray(path.start[1:], float)
 
     def f(p):
-        values, _, converged = _fold_values_program(path, disc, start, stop - start,
+        values, z, converged = _fold_values_program(path, disc, start, stop - start,
                                                     jnp.asarray(p, jnp.float64), z0)
-        return values, converged
+        inside = jnp.all((z[:, -1] >= 0.0) & (z[:, -1] <= 1.0))
+        return values, converged & inside
 
     return f, p0

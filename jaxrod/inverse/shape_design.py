@@ -32,7 +32,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod import spectral
+from jaxrod.discretise.tail import tail_estimate
 from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise, equilibrium
+from jaxrod.equilibria.resolution import TOLERANCE
 from jaxrod.inverse.scene_fit import magnet_margins, with_values
 from jaxrod.params import ParameterError, check_value
 from jaxrod.programs import jit
@@ -60,10 +62,12 @@ class ShapeDesign:
     smallest eigenvalue ``smallest_eigenvalue`` > 0; ``margin_met``: at least the margin
     asked), ``reached`` (the shape within ``REACHED`` sigma of the target: else the bounds,
     the margin or the basis keep the design from it, said in ``reason``), ``reachable``
-    (ramping the designed
-    scene's loads from zero reaches this equilibrium, to 1e-8 rad), ``converged`` (the least
-    squares converged and the equilibrium solves did), ``iterations``, ``status``,
-    ``scene`` the designed scene (or rig) and ``state`` its equilibrium."""
+    (ramping the designed scene's loads from zero reaches this equilibrium, to 1e-8 rad),
+    ``error_estimate`` (the tail of its Chebyshev series, radians: above
+    ``jaxrod.equilibria.resolution.TOLERANCE`` the status is UNDER_RESOLVED, raise n),
+    ``converged`` (the least squares converged and the equilibrium solves did),
+    ``iterations``, ``status``, ``scene`` the designed scene (or rig) and ``state`` its
+    equilibrium."""
 
     values: dict
     s: np.ndarray
@@ -75,6 +79,7 @@ class ShapeDesign:
     reachable: bool
     margin_met: bool
     reached: bool
+    error_estimate: float
     converged: bool
     iterations: int
     status: Status
@@ -88,6 +93,7 @@ class ShapeDesign:
                 "shape_error_deg": self.shape_error_deg, "stable": self.stable,
                 "smallest_eigenvalue": self.smallest_eigenvalue, "reachable": self.reachable,
                 "margin_met": self.margin_met, "reached": self.reached, "reason": self.reason,
+                "error_estimate": self.error_estimate,
                 "converged": self.converged, "iterations": self.iterations,
                 "status": self.status.name.lower()}
 
@@ -210,6 +216,9 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
         reachable &= bool(ramped.converged) and float(np.max(np.abs(ramped.state - x[k]))) \
             <= 1e-8
     converged = bool(res.converged) and bool(res.ok)
+    error_estimate = tail_estimate(disc, x)
+    status = Status.NOT_CONVERGED if not converged else (
+        Status.UNDER_RESOLVED if error_estimate > TOLERANCE else Status.SUCCESS)
     one = (lambda a: a[0]) if cases is None else (lambda a: a)
     error = float(np.max(np.abs(tangent - target)))
     reached = error <= REACHED * sigma_deg
@@ -227,7 +236,7 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg, n: int = DEFAULT
                        stable=eig > 0.0, smallest_eigenvalue=eig, reachable=reachable,
                        margin_met=eig >= margin * (1.0 - MARGIN_TOLERANCE),
                        converged=converged, iterations=int(res.iterations),
-                       status=Status.SUCCESS if converged else Status.NOT_CONVERGED,
+                       error_estimate=error_estimate, status=status,
                        scene=designed, state=one(x))
 
 

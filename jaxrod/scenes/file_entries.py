@@ -96,28 +96,26 @@ def angle_profile(mag: dict, kind, geometry: str):
                                       "\"planar\" (the 3D rod's chart carries no d1)")
     if key == "angle_deg":
         return np.radians([number(mag, "angle_deg", "magnetisation.")])
-    c = mag["profile_deg"]
-    if not isinstance(c, list) or not c or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-            for v in c):
-        fail("magnetisation.profile_deg", f"must be a list of finite numbers (degrees: "
-                                           f"c0 + c1 s + c2 s^2 ...), got {c!r}")
-    return np.radians(np.asarray(c, float))
+    return np.radians(coefficients(mag, "profile_deg", "magnetisation.",
+                                   "degrees: c0 + c1 s + c2 s^2 ..."))
 
 
-def coefficients(table: dict, key: str, where: str, what: str):
-    """A list of finite numbers, Chebyshev coefficients in 2 s - 1 of ``what`` along the rod
-    ([1.0] is uniform), or None where the key is absent."""
+def coefficients(table: dict, key: str, where: str, form: str):
+    """A profile's coefficients, a list of finite numbers (``form`` says what they are, for
+    the error), or None where the key is absent."""
     if key not in table:
         return None
     d = table[key]
     if not isinstance(d, list) or not d or not all(
             isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
             for v in d):
-        fail(f"{where}{key}", f"must be a list of finite numbers (Chebyshev coefficients of "
-                              f"{what} in 2 s - 1: d0 T0 + d1 T1 + ...; [1.0] is uniform), "
-                              f"got {d!r}")
+        fail(f"{where}{key}", f"must be a list of finite numbers ({form}), got {d!r}")
     return np.asarray(d, float)
+
+
+def chebyshev_form(what: str) -> str:
+    """The error's words for Chebyshev coefficients of ``what`` along the rod."""
+    return f"Chebyshev coefficients of {what} in 2 s - 1: d0 T0 + d1 T1 + ...; [1.0] is uniform"
 
 
 def strength_profile(mag: dict, kind, geometry: str, fields):
@@ -131,7 +129,8 @@ def strength_profile(mag: dict, kind, geometry: str, fields):
         fail(key, "a remanence profile needs geometry = \"planar\"")
     if any(f.get("kind") != "uniform" for f in fields):
         fail(key, "a remanence profile acts in uniform fields")
-    return coefficients(mag, "strength_profile", "magnetisation.", "the remanence")
+    return coefficients(mag, "strength_profile", "magnetisation.",
+                        chebyshev_form("the remanence"))
 
 
 def direction(angle: float):

@@ -50,6 +50,7 @@ import numpy as np
 from jaxrod.params import MU0, ParameterError
 from jaxrod.scenes.file_entries import (
     angle_profile,
+    chebyshev_form,
     check_plausible,
     coefficients,
     direction,
@@ -232,7 +233,7 @@ def scene_from(data: dict) -> FileScene:
         fail("rod.support", f"must be \"clamped\" or \"pinned\", got {support!r}")
     inputs: dict[str, tuple[str, float]] = {}
     margins: dict[str, float] = {}
-    taper = coefficients(rod, "stiffness_profile", "rod.", "E I(s) / E I")
+    taper = coefficients(rod, "stiffness_profile", "rod.", chebyshev_form("E I(s) / E I"))
     terms = {"bending": Bending() if taper is None else TaperedBending(taper)}
     for k in range(0 if taper is None else len(taper)):
         inputs[f"rod.stiffness_profile.{k}"] = (f"bending.stiffness.{k}", 1.0)

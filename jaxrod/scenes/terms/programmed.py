@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrod.scenes.terms import term
-from jaxrod.scenes.terms.tapered_bending import chebyshev_series
+from jaxrod.spectral import chebyshev_series
 
 
 @term("programmed")

@@ -12,16 +12,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxrod.scenes.terms import term
-
-
-def chebyshev_series(coefficients, s):
-    """sum_k c_k T_k(2 s - 1) by Clenshaw's recurrence (traceable in the coefficients)."""
-    c = jnp.asarray(coefficients)
-    x = 2.0 * s - 1.0
-    b1 = b2 = jnp.zeros_like(x)
-    for d in c[:0:-1]:
-        b1, b2 = d + 2.0 * x * b1 - b2, b1
-    return c[0] + x * b1 - b2
+from jaxrod.spectral import chebyshev_series
 
 
 @term("tapered_bending")
