@@ -27,16 +27,25 @@ def add_design_scene_options(de) -> None:
     add_scene_file_inputs(de, vary=True, vary_name="--path")
     de.add_argument("--targets", type=float, nargs="+", help="scene file: the folds' "
                     "targets along --path, in order; with --free KEYS")
+    de.add_argument("--width", type=_float("width"), default=None,
+                    help="scene file: the hysteresis width to design for, the first fold "
+                    "met along --path less the second (with or without --targets)")
     de.add_argument("--free", action="append", default=[], metavar="KEY",
                     help="scene file: an input to solve for (a list's key frees all its "
                     "coefficients, e.g. magnetisation.strength_profile); repeatable, or "
                     "comma-separated")
     de.add_argument("--target-shape", default=None, metavar="FILE.csv",
                     help="scene file: design for a target shape, a CSV with header "
-                    "s,tangent_deg (the tangent angle from +z toward +x at s in [0, 1])")
+                    "s,tangent_deg (the tangent angle from +z toward +x at s in [0, 1]), "
+                    "s,x,z (the centreline's points, rod lengths) or s,x,z,tangent_deg")
+    de.add_argument("--target-tip", default=None, metavar="X,Z[,DEG]",
+                    help="scene file: design for a tip pose, its position (rod lengths from "
+                    "the clamp) and optionally its tangent angle in degrees")
     de.add_argument("--margin", type=_float("margin"), default=0.0,
-                    help="a shape design's stability margin: the Hessian's smallest "
-                    "eigenvalue to keep (default 0: stable)")
+                    help="a shape design's stability margin: the smallest eigenvalue of the "
+                    "second variation per unit int dtheta^2 ds to keep along the ramp of "
+                    "the loads from zero (default 0: stable; pi^2/4 for the unloaded "
+                    "clamped-free rod)")
     de.add_argument("--out", default=None, help="directory for design.json and shape.png "
                     "(a shape design)")
 
@@ -86,6 +95,7 @@ def _report(args, file, keys, free, fit, factor, what: str) -> int:
     std = None if fit.std is None else {k: fit.std[s] / abs(f) for k, (s, f) in zip(keys, free)}
     out = {"vary": args.vary, "free": keys, "estimates": est, "std": std,
            "folds": [v / factor for v in fit.folds],
+           "width": (fit.folds[0] - fit.folds[1]) / factor if len(fit.folds) >= 2 else None,
            "residuals": [None if r is None else r / factor for r in fit.residuals],
            "converged": fit.converged, "iterations": fit.iterations, "reason": fit.reason}
     if getattr(args, "out", None):
@@ -99,6 +109,8 @@ def _report(args, file, keys, free, fit, factor, what: str) -> int:
             spread = f" +- {std[k]:.6g}" if std else ""
             print(f"{k} = {est[k]:.10g}{spread}")
         print(f"folds along {args.vary}: " + ", ".join(f"{v:.10g}" for v in out["folds"]))
+        if out["width"] is not None:
+            print(f"hysteresis width (the first fold less the second): {out['width']:.10g}")
         print(f"converged: {fit.converged}" + (f" ({fit.reason})" if fit.reason else ""))
     return 0 if fit.converged else 1
 
@@ -124,17 +136,19 @@ def design_on_file(args) -> int:
     ``jaxrod design RIG --free KEY --target-shape FILE.csv`` (``shape_on_file``)."""
     from jaxrod.inverse.scene_fit import design_folds
 
-    if args.target_shape is not None:
+    if args.target_shape is not None or args.target_tip is not None:
         from jaxrod.cli.shape_design import shape_on_file
 
         return shape_on_file(args)
     file = _load(args)
     args.vary = args.path
     key, start, stop, factor = _range(args, file)
-    if not args.targets:
+    if not args.targets and args.width is None:
         raise ParameterError("targets: give the folds' target values (--targets V1 V2 ..., "
-                             "in the order met along --path)")
+                             "in the order met along --path; nan: not targeted) or a "
+                             "hysteresis width (--width W)")
     keys, free, bounds = _free_and_bounds(args, file)
-    fit = design_folds(file, key, (start, stop), [factor * v for v in args.targets],
-                       [s for s, _ in free], bounds, n=args.n)
+    fit = design_folds(file, key, (start, stop), [factor * v for v in args.targets or []],
+                       [s for s, _ in free], bounds, n=args.n,
+                       width=None if args.width is None else factor * args.width)
     return _report(args, file, keys, free, fit, factor, "design")

@@ -124,8 +124,8 @@ def record(problem, res, folds, design: bool) -> SceneFit:
                             f"{entry['combination_text']}")
     sigma = problem.arrays["sigma"]
     r = np.asarray(res.r)
-    which, sign = (np.asarray(problem.arrays[k]) for k in ("which", "sign"))
-    model = sign * np.asarray(folds)[which] + p[-1]
+    weights, shifted = (np.asarray(problem.arrays[k]) for k in ("weights", "shifted"))
+    model = weights @ np.asarray(folds) + shifted * p[-1]
     residuals = [float(v - d) if mk else None
                  for v, d, mk in zip(model, problem.data, problem.mask)]
     chi2 = float(np.dot(r, r))

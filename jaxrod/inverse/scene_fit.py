@@ -6,7 +6,10 @@ The folds f_k(p) are those met along one input v (``vary``) over a range, in the
 of a symmetric rig sees -f_k), and every datum may share an unknown offset delta of the
 scale v is read on (a misaligned track):
 
-    model_i(p, delta) = s_i f_{k_i}(p) + delta        (``readout`` = ((k_i, s_i), ...)).
+    model_i(p, delta) = s_i f_{k_i}(p) + delta        (``readout`` = ((k_i, s_i), ...)),
+
+or a difference of two folds, f_k - f_j (a hysteresis width: the readout ``(k, j)`` as
+``{k: 1, j: -1}``; the offset cancels).
 
 The free inputs p (any inputs of a scene by key, any numbers of a rig by file key) and
 delta (``OFFSET``, when ``offset`` is True) minimise half of
@@ -55,7 +58,7 @@ from jaxrod.status import Status
 
 # --- the program ----------------------------------------------------------------------------
 
-def _program(path, disc, origin, span, z0, p0, free, data, mask, sigma, which, sign,
+def _program(path, disc, origin, span, z0, p0, free, data, mask, sigma, weights, shifted,
              prior_mean, prior_scale, lower, upper, magnets, max_iter):
     """p = (the path's inputs after ``vary``, the offset): the least-squares answer (in the
     scaled parameters x = p / |p0|, so that inputs of any size start alike; 1 for an entry
@@ -80,7 +83,7 @@ def _program(path, disc, origin, span, z0, p0, free, data, mask, sigma, which, s
             & jnp.all(jnp.diff(lam) * jnp.sign(jnp.diff(z0[:, -1])) > 0.0) \
             & jnp.all(~free | ((p >= lower) & (p <= upper))) \
             & jnp.all(jax.vmap(lambda v: clear(p, v))(values))
-        model = sign * values[which] + p[-1]
+        model = weights @ values + shifted * p[-1]
         r = jnp.where(mask, (model - data) / sigma, 0.0)
         return jnp.concatenate([r, (p - prior_mean) * prior_scale]), z_new, ok
 
@@ -93,11 +96,12 @@ _fit_program = jit(_program, static_argnames=("max_iter",))
 
 
 @jit(static_argnames=("max_iter",))
-def _batch_program(path, disc, origin, span, z0, p0, free, data, mask, sigma, which, sign,
+def _batch_program(path, disc, origin, span, z0, p0, free, data, mask, sigma, weights,
+                   shifted,
                    prior_mean, prior_scale, lower, upper, magnets, max_iter):
     """``_program`` of each row of ``data`` and ``mask`` (vmapped)."""
     return jax.vmap(lambda d, mk: _program(
-        path, disc, origin, span, z0, p0, free, d, mk, sigma, which, sign, prior_mean,
+        path, disc, origin, span, z0, p0, free, d, mk, sigma, weights, shifted, prior_mean,
         prior_scale, lower, upper, magnets, max_iter))(data, mask)
 
 
@@ -197,11 +201,7 @@ def _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n, readout,
     mask = ~np.isnan(data)
     if not mask.any():
         raise ParameterError("measured: at least one value is needed")
-    readout = np.asarray(readout if readout is not None else
-                         [(i, 1) for i in range(data.size)], float).reshape(-1, 2)
-    if readout.shape[0] != data.size or np.any(np.abs(readout[:, 1]) != 1) \
-            or np.any(readout[:, 0] < 0) or np.any(readout[:, 0] % 1):
-        raise ParameterError("readout: one (fold index, sign +-1) per datum")
+    weights, shifted = _readout_weights(readout, data.size)
     if not (math.isfinite(sigma) and sigma > 0):
         raise ParameterError(f"sigma must be a finite number > 0, got {sigma!r}")
     here = _identity(scene)
@@ -231,13 +231,13 @@ def _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n, readout,
     if np.any(free_mask & ((p0 < lower) | (p0 > upper))):
         raise ParameterError("bounds: the scene's values of the free inputs (the start) lie "
                              "outside the bounds")
-    n_folds = int(readout[:, 0].max()) + 1
+    n_folds = weights.shape[1]
     disc = discretise(path.template, n)
     arrays = dict(path=path, disc=disc, origin=start,
                   span=stop - start, z0=z0, p0=jnp.asarray(p0),
                   free=jnp.asarray(free_mask), sigma=float(sigma),
-                  which=jnp.asarray(readout[:, 0].astype(np.int32)),
-                  sign=jnp.asarray(readout[:, 1]), prior_mean=jnp.asarray(mean),
+                  weights=jnp.asarray(weights), shifted=jnp.asarray(shifted),
+                  prior_mean=jnp.asarray(mean),
                   prior_scale=jnp.asarray(scale * free_mask), lower=jnp.asarray(lower),
                   upper=jnp.asarray(upper), magnets=_remembered(
                       ("magnets", here, keys), lambda: magnet_margins(scene, keys, p0)))
@@ -260,11 +260,42 @@ def _prepare(scene, vary, vary_range, measured, free, sigma, bounds, n, readout,
                     abs(stop - start)), path
 
 
+def _readout_weights(readout, n_data: int) -> tuple[np.ndarray, np.ndarray]:
+    """(W, o): datum i reads W[i] @ folds + o[i] delta. A readout entry (k, s) is s f_k
+    (o = 1), a dict {k: 1, j: -1} the difference f_k - f_j (o = 0); by default the folds
+    in the order met."""
+    entries = list(readout) if readout is not None else [(i, 1) for i in range(n_data)]
+    rows = []
+    for entry in entries:
+        if isinstance(entry, dict):
+            pairs = [(k, float(v)) for k, v in entry.items()]
+            ok = sorted(v for _, v in pairs) == [-1.0, 1.0]
+        else:
+            try:
+                k, v = entry
+                pairs, ok = [(k, float(v))], abs(float(v)) == 1.0
+            except (TypeError, ValueError):
+                pairs, ok = [], False
+        ok = ok and all(isinstance(k, (int, np.integer)) or float(k).is_integer()
+                        for k, _ in pairs) and all(float(k) >= 0 for k, _ in pairs)
+        if not ok:
+            raise ParameterError("readout: one (fold index, sign +-1) per datum, or a "
+                                 "difference {k: 1, j: -1} of two folds")
+        rows.append(pairs)
+    if len(rows) != n_data:
+        raise ParameterError("readout: one (fold index, sign +-1) per datum")
+    W = np.zeros((n_data, int(max(k for pairs in rows for k, _ in pairs)) + 1))
+    for i, pairs in enumerate(rows):
+        for k, v in pairs:
+            W[i, int(k)] = v
+    return W, np.array([float(len(pairs) == 1) for pairs in rows])
+
+
 def _fit_arguments(a: dict, data, mask) -> tuple:
     """``_fit_program``'s arguments but ``max_iter``, from a problem's arrays."""
     return (a["path"], a["disc"], a["origin"], a["span"], a["z0"], a["p0"], a["free"],
-            jnp.asarray(np.nan_to_num(data)), jnp.asarray(mask), a["sigma"], a["which"],
-            a["sign"], a["prior_mean"], a["prior_scale"], a["lower"], a["upper"],
+            jnp.asarray(np.nan_to_num(data)), jnp.asarray(mask), a["sigma"], a["weights"],
+            a["shifted"], a["prior_mean"], a["prior_scale"], a["lower"], a["upper"],
             a["magnets"])
 
 
@@ -328,7 +359,7 @@ def fit_batch(scene: Scene | FileScene, vary: str, vary_range: tuple[float, floa
         res, folds = _batch_program(
             a["path"], a["disc"], a["origin"], a["span"], a["z0"], a["p0"], a["free"],
             jnp.asarray(np.nan_to_num(rows)), jnp.asarray(~np.isnan(rows)), a["sigma"],
-            a["which"], a["sign"], a["prior_mean"], a["prior_scale"], a["lower"], a["upper"],
+            a["weights"], a["shifted"], a["prior_mean"], a["prior_scale"], a["lower"], a["upper"],
             a["magnets"], max_iter)
         return [record(pr, jax.tree.map(lambda x, i=i: x[i], res), folds[i], False)
                 for i, pr in enumerate(problems)]
@@ -406,15 +437,26 @@ def profile(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float]
 
 def design_folds(scene: Scene | FileScene, vary: str, vary_range: tuple[float, float],
                  targets, free, bounds: dict | None = None, n: int = DEFAULT_N, *,
-                 readout=None, starts: int = 0) -> SceneFit | list[SceneFit]:
+                 readout=None, starts: int = 0,
+                 width: float | None = None) -> SceneFit | list[SceneFit]:
     """The inputs ``free`` whose folds along ``vary`` sit at ``targets`` (``readout`` as in
-    ``fit_folds``): the fit with the targets as data; converged means the targets are hit
-    to 1e-9 of the range. ``starts`` > 0: also from a grid of ``starts`` values per input
+    ``fit_folds``; NaN: a fold not targeted): the fit with the targets as data; converged
+    means the targets are hit to 1e-9 of the range. ``width``: a hysteresis width too, the
+    first fold met less the second, f_0 - f_1 (positive for a loop met sweeping up).
+    ``starts`` > 0: also from a grid of ``starts`` values per input
     within the (finite) bounds (cell centres, in log for positive bounds; a start without
     the folds is skipped), and the list of the distinct answers, those that hit the targets
     first, then by their largest miss."""
     start, stop = check_range(scene, vary, *vary_range)
     tol = 1e-9 * abs(stop - start)
+    if width is not None:
+        check_value("width", width, lambda v: v != 0.0, "a finite number, not 0 (the first "
+                    "fold met less the second)")
+        targets = [float(v) for v in np.atleast_1d(np.asarray(
+            [] if targets is None else targets, float))]
+        readout = [*(readout if readout is not None else
+                     [(i, 1) for i in range(len(targets))]), {0: 1, 1: -1}]
+        targets = targets + [float(width)]
 
     def checked(out: SceneFit) -> SceneFit:
         miss = max(abs(r) for r in out.residuals if r is not None)
