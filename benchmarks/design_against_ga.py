@@ -133,8 +133,8 @@ def markdown(res: dict) -> str:
              "", f"A remanence strength profile of K Chebyshev coefficients for the shape (at "
              f"21 points) of a known profile, N = {res['N']}; the same compiled forward model "
              "for the peers (Newton from the uniform rod's equilibrium). Wall times warm; "
-             "jaxrod's include its start and its checks (two ramped equilibria, the "
-             "Hessian).", ""]
+             "jaxrod's include its start and its checks (the ramped equilibria, the "
+             "continued ramp and its eigenvalues).", ""]
     for pr in res["problems"]:
         jr_row = pr["rows"][0]
         lines += [f"K = {pr['K']} (jaxrod's first call, with compilation: "

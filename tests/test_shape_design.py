@@ -217,6 +217,39 @@ def test_one_profile_for_two_target_shapes_under_two_fields(tmp_path):
     np.testing.assert_allclose([d.values[k] for k in keys], [1.0, 0.3], rtol=0, atol=1e-7)
 
 
+def test_roughness_smooths_a_profile_and_keeps_a_smooth_one(tmp_path):
+    """``roughness`` penalises int_0^1 mu''(s)^2 ds of the free profile. The shape of the
+    linear profile 1 + 0.3 (2s - 1) (scipy's solve_bvp, tol 1e-10) comes back to 1e-7 with
+    eight coefficients and the penalty on (it vanishes there); a target with a ripple no
+    profile of eight coefficients follows (0.5 sin(40 s) degrees) gets a profile whose
+    int mu''^2 falls by more than 1e3 at roughness 0.1."""
+    from scipy.integrate import solve_bvp
+
+    from jaxrod.inverse.shape_design import _roughness_rows
+
+    K = 8
+    rig = _rig(tmp_path, f"strength_profile = {[1.0] + [0.0] * (K - 1)}")
+    keys = [f"magnetisation.strength_profile.{k}" for k in range(K)]
+    mu = lambda s: 1.0 + 0.3 * (2 * s - 1)
+    sol = solve_bvp(lambda s, y: np.vstack([y[1], -LOAD * mu(s) * np.cos(y[0])]),
+                    lambda ya, yb: np.array([ya[0], yb[1]]), np.linspace(0, 1, 50),
+                    np.zeros((2, 50)), tol=1e-10, max_nodes=100000)
+    assert sol.success
+    target = np.degrees(sol.sol(S)[0])
+    smooth = design_shape(rig, keys, S, target, n=16, roughness=1.0)
+    assert smooth.converged and smooth.reached
+    np.testing.assert_allclose([smooth.values[k] for k in keys], [1.0, 0.3] + [0.0] * 6,
+                               rtol=0, atol=1e-7)
+    R = _roughness_rows(keys)
+    bend = lambda d: float(np.sum((R @ [d.values[k] for k in keys]) ** 2))
+    rippled = target + 0.5 * np.sin(40 * S)
+    free = design_shape(rig, keys, S, rippled, n=16)
+    held = design_shape(rig, keys, S, rippled, n=16, roughness=0.1)
+    assert free.converged and held.converged and bend(held) < 1e-3 * bend(free)
+    with pytest.raises(ParameterError, match="roughness"):
+        design_shape(rig, keys[1:], S, target, n=16, roughness=1.0)
+
+
 def test_a_magnet_placed_for_a_target_shape(tmp_path):
     """A dipole's field: the shape of the rod under a magnet at (0.6, 1.3) rod lengths (by
     jaxrod at N = 16) is the target; from (0.5, 1.4) the design finds the magnet's position

@@ -41,6 +41,9 @@ def add_design_scene_options(de) -> None:
     de.add_argument("--target-tip", default=None, metavar="X,Z[,DEG]",
                     help="scene file: design for a tip pose, its position (rod lengths from "
                     "the clamp) and optionally its tangent angle in degrees")
+    de.add_argument("--roughness", type=_float("roughness"), default=0.0,
+                    help="a shape design's penalty on each free profile's int f''(s)^2 ds "
+                    "(default 0)")
     de.add_argument("--margin", type=_float("margin"), default=0.0,
                     help="a shape design's stability margin: the smallest eigenvalue of the "
                     "second variation per unit int dtheta^2 ds to keep along the ramp of "

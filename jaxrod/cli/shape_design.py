@@ -99,7 +99,7 @@ def shape_on_file(args) -> int:
     keys = free_keys(file, items)
     bounds = bounds_of(args, keys + items)  # a list's key bounds its profile's values
     d = design_shape(file, keys, s, target, n=args.n, bounds=bounds, margin=args.margin,
-                     target_xz=points)
+                     target_xz=points, roughness=args.roughness)
     out = {"rig": args.rig, "free": keys, **d.as_dict(),
            "profile": _profile(d.scene, np.linspace(0.0, 1.0, 101))}
     if args.out:

@@ -4,7 +4,8 @@ coefficients, a field, a stiffness group) whose equilibrium takes a target shape
 The target is the tangent angle theta*(s_i) at points s_i in [0, 1] (degrees, from +z toward
 +x). The free inputs p (keys of the scene or rig) minimise
 
-    0.5 sum_i ((theta(s_i; p) - theta*(s_i)) / sigma)^2 + 0.5 smoothing |p - p0|^2 / |p0|^2,
+    0.5 sum_i ((theta(s_i; p) - theta*(s_i)) / sigma)^2 + 0.5 smoothing |p - p0|^2 / |p0|^2
+        + 0.5 roughness^2 sum_profiles int_0^1 f''(s)^2 ds,
 
 where theta(.; p) is the equilibrium grad E(x; p) = 0 continued from the last accepted one
 by Newton, differentiated implicitly (dx/dp = -H^-1 d(grad E)/dp: exact gradients, never
@@ -174,12 +175,13 @@ def _ramped(scene, n: int, at=None):
 
 
 def _program(path, disc, x0, p0, free, cases, ramp, metric, readout, target, sigma, smoothing,
-             limits, magnets, margin, max_iter):
+             rough, limits, magnets, margin, max_iter):
     """The least squares over p (the path's inputs after the load scale, scaled by |p0|)
     from the equilibria x0 (K, R, m) of the K load cases at the R load scales ``ramp``
     (the last 1: the design's) at p0: case k sets the path's last inputs to ``cases[k]``;
     target (K, shape size) and sigma (shape size) in the units of ``shape_of``; limits =
-    (A, lo, hi): lo <= A p <= hi (the bounds of inputs and of profiles' values);
+    (A, lo, hi): lo <= A p <= hi (the bounds of inputs and of profiles' values); ``rough``
+    p: the profiles' roughness residuals;
     ``magnets``: term name -> (its radius in rod lengths at the start, its exponents in the
     path's inputs)."""
     unit = jnp.where(p0 == 0.0, 1.0, jnp.abs(p0))
@@ -219,12 +221,12 @@ def _program(path, disc, x0, p0, free, cases, ramp, metric, readout, target, sig
         least = jnp.concatenate([smallest, jax.vmap(lambda lam: lowest(ramp, lam))(
             smallest)[:, None]], axis=1) if ramp.shape[0] >= 3 else smallest
         short = (MARGIN_WEIGHT * jnp.maximum(margin - least, 0.0) * (margin > 0.0))
-        return jnp.concatenate([r, short.reshape(-1), smoothing * (u - p0 / unit) * free]), \
-            x_new, ok
+        return jnp.concatenate([r, short.reshape(-1), smoothing * (u - p0 / unit) * free,
+                                rough @ p]), x_new, ok
 
     res = least_squares_run(forward_mode(residuals), p0 / unit, x0, free,
                             target.size + x0.shape[0] * (x0.shape[1] + (
-                                x0.shape[1] >= 3)) + p0.shape[0], True,
+                                x0.shape[1] >= 3)) + p0.shape[0] + rough.shape[0], True,
                             max_iter)
     return res._replace(p=res.p * unit, J=res.J / unit)
 
@@ -235,14 +237,17 @@ _design_program = jit(_program, static_argnames=("max_iter",))
 def design_shape(scene: Scene | FileScene, free, s, target_deg=None, n: int = DEFAULT_N,
                  bounds: dict | None = None, sigma_deg: float = 1.0, smoothing: float = 0.0,
                  max_iter: int = 80, cases: dict | None = None, margin: float = 0.0, *,
-                 target_xz=None, sigma_length: float = 0.01) -> ShapeDesign:
+                 target_xz=None, sigma_length: float = 0.01,
+                 roughness: float = 0.0) -> ShapeDesign:
     """The inputs ``free`` (keys) of a planar scene or rig whose equilibrium's tangent angle
     at ``s`` is ``target_deg`` and (or) whose centreline passes through ``target_xz``
     ((len(s), 2): x and z in rod lengths from the clamp; a tip pose is s = [1] with both)
     (module docstring). The scene's values of the free inputs are the start; ``bounds``:
     key -> (lo, hi), an input's, or a profile's values along s by its list's key
     (``magnetisation.strength_profile``: mu(s), at 101 points; every coefficient free);
-    ``smoothing`` > 0 pulls the inputs towards the start (relative); ``sigma_deg`` and
+    ``smoothing`` > 0 pulls the inputs towards the start (relative); ``roughness`` > 0
+    penalises each profile of free coefficients by roughness^2 int_0^1 f''(s)^2 ds (its
+    values' units, beside residuals in sigmas); ``sigma_deg`` and
     ``sigma_length`` scale the residuals. ``cases``: several load cases at once, key -> its
     K values (e.g. two field directions, {"field.0.angle_deg": [90, 45]}), with one target
     row per case (``target_deg`` (K, len(s)), ``target_xz`` (K, len(s), 2)). ``margin`` >
@@ -267,11 +272,13 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg=None, n: int = DE
     check_value("sigma_deg", sigma_deg, lambda v: v > 0, "a number > 0")
     check_value("sigma_length", sigma_length, lambda v: v > 0, "a number > 0 (rod lengths)")
     check_value("smoothing", smoothing, lambda v: v >= 0, "a number >= 0")
+    check_value("roughness", roughness, lambda v: v >= 0, "a number >= 0")
     check_value("margin", margin, lambda v: v >= 0, "a number >= 0 (the Hessian's smallest "
                 "eigenvalue to keep)")
     path = along(scene, ("load_scale", *free, *case_keys))
     p0 = np.asarray(path.start[1:1 + len(free)], float)
     limits = _limits(dict(bounds or {}), free, p0)
+    rough = roughness * _roughness_rows(free) if roughness > 0 else np.zeros((0, len(free)))
     at_case = lambda sc, k: with_values(sc, dict(zip(case_keys, case_values[k])))
     ramp = np.linspace(1.0, 0.0, RAMP_POINTS, endpoint=False)[::-1] if margin > 0 else \
         np.ones(1)
@@ -294,7 +301,7 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg=None, n: int = DE
         path, disc, jnp.asarray(np.array(starts)), jnp.asarray(p0), jnp.ones(p0.size, bool),
         jnp.asarray(case_values), jnp.asarray(ramp), jnp.asarray(metric),
         tuple(map(jnp.asarray, readout)),
-        jnp.asarray(target), jnp.asarray(sigma), float(smoothing),
+        jnp.asarray(target), jnp.asarray(sigma), float(smoothing), jnp.asarray(rough),
         tuple(jnp.asarray(v) for v in limits),
         magnet_margins(scene, free + case_keys, np.r_[p0, case_values[0]]), float(margin),
         max_iter))
@@ -400,6 +407,51 @@ PROFILES = {"magnetisation.strength_profile": "chebyshev", "rod.stiffness_profil
             "chebyshev", "magnetisation.profile_deg": "powers"}
 
 
+def _profile_columns(key: str, free, what: str) -> tuple[list[int], list[int]] | None:
+    """(the positions in ``free`` of a profile's coefficients, their orders), None where none
+    is free; ParameterError where some are held."""
+    idx = [i for i, k in enumerate(free) if k.startswith(key + ".")]
+    if not idx:
+        return None
+    order = [int(free[i].rsplit(".", 1)[1]) for i in idx]
+    if sorted(order) != list(range(len(order))):
+        raise ParameterError(f"{what} {key}: a condition on the profile's values needs all "
+                             f"its coefficients free ({key}.0 to .{len(order) - 1})")
+    return idx, order
+
+
+def _basis(key: str, s, degree: int, derivative: int = 0) -> np.ndarray:
+    """The profile's basis functions' ``derivative``-th derivative in s at s, (len(s),
+    degree + 1)."""
+    eye = np.eye(degree + 1)
+    if PROFILES[key] == "chebyshev":
+        return np.stack([np.polynomial.chebyshev.chebval(2 * s - 1, np.polynomial.chebyshev
+                                                         .chebder(e, derivative) * 2.0 **
+                                                         derivative) for e in eye], axis=1)
+    return np.stack([np.polynomial.polynomial.polyval(
+        s, np.polynomial.polynomial.polyder(e, derivative)) for e in eye], axis=1)
+
+
+def _roughness_rows(free) -> np.ndarray:
+    """R with |R p|^2 = sum over the profiles of free coefficients of int_0^1 f''(s)^2 ds
+    (Gauss-Legendre, 32 nodes: exact for the degrees a file takes)."""
+    x, w = np.polynomial.legendre.leggauss(32)
+    s, w = (x + 1.0) / 2.0, w / 2.0
+    rows = []
+    for key in PROFILES:
+        found = _profile_columns(key, free, "roughness")
+        if found is None:
+            continue
+        idx, order = found
+        block = np.zeros((s.size, len(free)))
+        block[:, idx] = np.sqrt(w)[:, None] * _basis(key, s, len(idx) - 1, 2)[:, order]
+        rows.append(block)
+    if not rows:
+        raise ParameterError(f"roughness: it acts on a profile of free coefficients "
+                             f"({', '.join(PROFILES)}); none is free")
+    return np.concatenate(rows)
+
+
 def _limits(bounds: dict, free, p0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(A, lo, hi) with lo <= A p <= hi: a free input's bounds a row of the identity, a
     profile's bounds its basis at 101 points of s times its free coefficients."""
@@ -414,18 +466,13 @@ def _limits(bounds: dict, free, p0) -> tuple[np.ndarray, np.ndarray, np.ndarray]
         if key in free:
             rows.append(np.eye(len(free))[free.index(key)][None])
         elif key in PROFILES:
-            idx = [i for i, k in enumerate(free) if k.startswith(key + ".")]
-            if not idx:
+            found = _profile_columns(key, free, "bounds")
+            if found is None:
                 raise ParameterError(f"bounds {key}: free its coefficients ({key}.0, ...)")
-            order = [int(free[i].rsplit(".", 1)[1]) for i in idx]
-            if sorted(order) != list(range(len(order))):
-                raise ParameterError(f"bounds {key}: bounds on the profile's values need all "
-                                     f"its coefficients free ({key}.0 to .{len(order) - 1})")
+            idx, order = found
             s = np.linspace(0.0, 1.0, 101)
-            basis = (np.polynomial.chebyshev.chebvander(2 * s - 1, len(idx) - 1)
-                     if PROFILES[key] == "chebyshev" else np.vander(s, len(idx), True))
             block = np.zeros((s.size, len(free)))
-            block[:, idx] = basis[:, order]
+            block[:, idx] = _basis(key, s, len(idx) - 1)[:, order]
             rows.append(block)
         else:
             raise ParameterError(f"bounds: {key!r} is not free ({', '.join(free)}) nor a "
