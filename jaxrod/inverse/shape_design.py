@@ -2,21 +2,31 @@
 coefficients, a field, a stiffness group) whose equilibrium takes a target shape.
 
 The target is the tangent angle theta*(s_i) at points s_i in [0, 1] (degrees, from +z toward
-+x). The free inputs p (keys of the scene or rig) minimise
++x), or the centreline's points r*(s_i) = (x, z) (rod lengths from the clamp; r(s) =
+int_0^s (sin theta, cos theta) ds), or both (a tip pose: s = 1). The free inputs p (keys of
+the scene or rig) minimise
 
-    0.5 sum_i ((theta(s_i; p) - theta*(s_i)) / sigma)^2 + 0.5 smoothing |p - p0|^2 / |p0|^2
+    0.5 sum_i ((theta(s_i; p) - theta*(s_i)) / sigma)^2 + 0.5 sum_i |(r(s_i; p) - r*(s_i))
+        / sigma_length|^2 + 0.5 smoothing |p - p0|^2 / |p0|^2
         + 0.5 roughness^2 sum_profiles int_0^1 f''(s)^2 ds,
 
 where theta(.; p) is the equilibrium grad E(x; p) = 0 continued from the last accepted one
 by Newton, differentiated implicitly (dx/dp = -H^-1 d(grad E)/dp: exact gradients, never
 finite differences), with the least squares of ``jaxrod.solvers.least_squares`` (L-BFGS
 directions in Gauss-Newton scaling, Armijo line search; one compiled program for every
-target of the scene's structure). Bounds, a magnet within the rod's reach, and an unstable
-equilibrium (the Hessian not positive definite: a design the rod would snap away from)
-reject a trial point. The answer is
-checked: the Hessian's smallest eigenvalue (``stable``) and the equilibrium reached by
-ramping the loads of the designed scene from zero (``jaxrod.equilibrium``): ``reachable``
-where it is the designed one.
+target of the scene's structure). Bounds, a magnet within the rod's reach, a step that
+turns the rod by more than ``MAX_JUMP``, and an unstable equilibrium (the Hessian not
+positive definite: a design the rod would snap away from) reject a trial point.
+
+Stability is measured by the smallest eigenvalue of the second variation per unit
+int dtheta^2 ds (``l2_smallest``: H v = lambda M v with M the L2 Gram matrix; independent
+of N, pi^2 / 4 for the unloaded clamped-free rod of unit stiffness). A margin keeps it at
+least ``margin`` along the ramp of the loads from zero to the design (a penalty at
+``RAMP_POINTS`` load scales and at the vertex of the parabola through the least three). The
+answer is checked: the eigenvalue along the continued ramp (``jaxrod.branch`` in
+load_scale) and the equilibrium reached by ramping the loads of the designed scene from
+zero (``jaxrod.equilibrium``): ``reachable`` where it is the designed one, stable all the
+way.
 
 For a hard magnetisation mu(s) along the tangent in a uniform field at angle a, the moment
 balance theta'' + load mu(s) sin(a - theta) = 0, theta'(1) = 0 gives the profile of a
@@ -65,9 +75,10 @@ class ShapeDesign:
     ``tangent_deg`` the designed equilibrium's tangent angle at the target's ``s`` and
     ``shape_error_deg`` its largest difference from ``target_deg``; ``xz`` its centreline
     there and ``position_error`` its largest distance from ``target_xz`` (rod lengths; None
-    where not targeted); ``stable`` (the Hessian's smallest eigenvalue
-    ``smallest_eigenvalue`` > 0), ``path_smallest_eigenvalue`` (the smallest along the ramp
-    of the loads from zero; ``margin_met``: at least the margin asked there), ``reached``
+    where not targeted); ``stable`` (``smallest_eigenvalue`` > 0, the smallest eigenvalue
+    of the second variation per unit int dtheta^2 ds, ``l2_smallest``),
+    ``path_smallest_eigenvalue`` (the smallest along the ramp of the loads from zero;
+    ``margin_met``: at least the margin asked there), ``reached``
     (the shape within ``REACHED`` sigma of the target: else the bounds, the margin or the
     basis keep the design from it, said in ``reason``), ``reachable`` (ramping the designed
     scene's loads from zero reaches this equilibrium, stable all the way, to 1e-8 rad),
@@ -192,8 +203,8 @@ def _program(path, disc, x0, p0, free, cases, ramp, metric, readout, target, sig
         scene = path.at(jnp.concatenate([jnp.ones(1), q]))
         safe = jnp.where(start == 0.0, 1.0, start)
         gaps = [jnp.linalg.norm(scene.terms[t].centre()) - 1.0
-                - margin * jnp.prod(jnp.where(k == 0, 1.0, (q / safe) ** k))
-                for t, (margin, k) in magnets.items()]
+                - radius * jnp.prod(jnp.where(k == 0, 1.0, (q / safe) ** k))
+                for t, (radius, k) in magnets.items()]
         return jnp.all(jnp.stack(gaps) > 0.0) if gaps else jnp.asarray(True)
 
     def solve(p, x, case, scale):
@@ -251,8 +262,8 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg=None, n: int = DE
     ``sigma_length`` scale the residuals. ``cases``: several load cases at once, key -> its
     K values (e.g. two field directions, {"field.0.angle_deg": [90, 45]}), with one target
     row per case (``target_deg`` (K, len(s)), ``target_xz`` (K, len(s), 2)). ``margin`` >
-    0: a stability margin, the Hessian's smallest eigenvalue at least ``margin`` along the
-    whole ramp of the loads from zero to the design in every case (a penalty
+    0: a stability margin, ``l2_smallest`` at least ``margin`` along the whole ramp of the
+    loads from zero to the design in every case (a penalty
     ``MARGIN_WEIGHT`` (margin - lambda_min) at ``RAMP_POINTS`` load scales where it falls
     short; ``margin_met`` says whether it holds to ``MARGIN_TOLERANCE`` of it at every
     point of the continued ramp, ``path_smallest_eigenvalue``). A target no design reaches
@@ -260,7 +271,7 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg=None, n: int = DE
     error."""
     inner = scene.scene if isinstance(scene, FileScene) else scene
     if inner.geometry != "planar":
-        raise ParameterError("scene: shape targets are tangent angles of a planar rod "
+        raise ParameterError("scene: shape targets are shapes of a planar rod "
                              f"(geometry = \"planar\"), got {inner.geometry!r}")
     free = tuple(free)
     if not free or len(set(free)) != len(free):
@@ -273,8 +284,8 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg=None, n: int = DE
     check_value("sigma_length", sigma_length, lambda v: v > 0, "a number > 0 (rod lengths)")
     check_value("smoothing", smoothing, lambda v: v >= 0, "a number >= 0")
     check_value("roughness", roughness, lambda v: v >= 0, "a number >= 0")
-    check_value("margin", margin, lambda v: v >= 0, "a number >= 0 (the Hessian's smallest "
-                "eigenvalue to keep)")
+    check_value("margin", margin, lambda v: v >= 0, "a number >= 0 (the smallest eigenvalue "
+                "of the second variation per unit int dtheta^2 ds to keep)")
     path = along(scene, ("load_scale", *free, *case_keys))
     p0 = np.asarray(path.start[1:1 + len(free)], float)
     limits = _limits(dict(bounds or {}), free, p0)
@@ -288,7 +299,8 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg=None, n: int = DE
         if not full.converged:
             raise ParameterError(f"scene: its equilibrium at the start (load case {k}) did "
                                  f"not converge ({full.status.message})")
-        starts.append([*_ramped(at_case(scene, k), n, ramp[:-1])[1], full.state])
+        on_way = list(_ramped(at_case(scene, k), n, ramp[:-1])[1]) if ramp.size > 1 else []
+        starts.append([*on_way, full.state])
     disc = discretise(path.template, n)
     metric = l2_metric(disc)
     readout = _readout(disc, s, angles is not None, points is not None)
