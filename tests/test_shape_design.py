@@ -225,7 +225,7 @@ def test_roughness_smooths_a_profile_and_keeps_a_smooth_one(tmp_path):
     int mu''^2 falls by more than 1e3 at roughness 0.1."""
     from scipy.integrate import solve_bvp
 
-    from jaxrod.inverse.shape_design import _roughness_rows
+    from jaxrod.inverse.profile_conditions import roughness_rows
 
     K = 8
     rig = _rig(tmp_path, f"strength_profile = {[1.0] + [0.0] * (K - 1)}")
@@ -240,7 +240,7 @@ def test_roughness_smooths_a_profile_and_keeps_a_smooth_one(tmp_path):
     assert smooth.converged and smooth.reached
     np.testing.assert_allclose([smooth.values[k] for k in keys], [1.0, 0.3] + [0.0] * 6,
                                rtol=0, atol=1e-7)
-    R = _roughness_rows(keys)
+    R = roughness_rows(keys)
     bend = lambda d: float(np.sum((R @ [d.values[k] for k in keys]) ** 2))
     rippled = target + 0.5 * np.sin(40 * S)
     free = design_shape(rig, keys, S, rippled, n=16)

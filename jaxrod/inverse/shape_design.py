@@ -47,6 +47,7 @@ from jaxrod.discretise.tail import tail_estimate
 from jaxrod.equilibria.branch import branch
 from jaxrod.equilibria.equilibrium import DEFAULT_N, MODEL, discretise, equilibrium
 from jaxrod.equilibria.resolution import TOLERANCE
+from jaxrod.inverse.profile_conditions import bound_rows, roughness_rows
 from jaxrod.inverse.scene_fit import magnet_margins, with_values
 from jaxrod.params import ParameterError, check_value
 from jaxrod.programs import jit
@@ -288,8 +289,8 @@ def design_shape(scene: Scene | FileScene, free, s, target_deg=None, n: int = DE
                 "of the second variation per unit int dtheta^2 ds to keep)")
     path = along(scene, ("load_scale", *free, *case_keys))
     p0 = np.asarray(path.start[1:1 + len(free)], float)
-    limits = _limits(dict(bounds or {}), free, p0)
-    rough = roughness * _roughness_rows(free) if roughness > 0 else np.zeros((0, len(free)))
+    limits = bound_rows(dict(bounds or {}), free, p0)
+    rough = roughness * roughness_rows(free) if roughness > 0 else np.zeros((0, len(free)))
     at_case = lambda sc, k: with_values(sc, dict(zip(case_keys, case_values[k])))
     ramp = np.linspace(1.0, 0.0, RAMP_POINTS, endpoint=False)[::-1] if margin > 0 else \
         np.ones(1)
@@ -412,90 +413,6 @@ RAMP_POINTS = 8
 
 #: A shape within this many sigma of the target everywhere is reached.
 REACHED = 1e-6
-
-
-#: A profile's basis by its list's key: Chebyshev in 2 s - 1, or powers of s (degrees).
-PROFILES = {"magnetisation.strength_profile": "chebyshev", "rod.stiffness_profile":
-            "chebyshev", "magnetisation.profile_deg": "powers"}
-
-
-def _profile_columns(key: str, free, what: str) -> tuple[list[int], list[int]] | None:
-    """(the positions in ``free`` of a profile's coefficients, their orders), None where none
-    is free; ParameterError where some are held."""
-    idx = [i for i, k in enumerate(free) if k.startswith(key + ".")]
-    if not idx:
-        return None
-    order = [int(free[i].rsplit(".", 1)[1]) for i in idx]
-    if sorted(order) != list(range(len(order))):
-        raise ParameterError(f"{what} {key}: a condition on the profile's values needs all "
-                             f"its coefficients free ({key}.0 to .{len(order) - 1})")
-    return idx, order
-
-
-def _basis(key: str, s, degree: int, derivative: int = 0) -> np.ndarray:
-    """The profile's basis functions' ``derivative``-th derivative in s at s, (len(s),
-    degree + 1)."""
-    eye = np.eye(degree + 1)
-    if PROFILES[key] == "chebyshev":
-        return np.stack([np.polynomial.chebyshev.chebval(2 * s - 1, np.polynomial.chebyshev
-                                                         .chebder(e, derivative) * 2.0 **
-                                                         derivative) for e in eye], axis=1)
-    return np.stack([np.polynomial.polynomial.polyval(
-        s, np.polynomial.polynomial.polyder(e, derivative)) for e in eye], axis=1)
-
-
-def _roughness_rows(free) -> np.ndarray:
-    """R with |R p|^2 = sum over the profiles of free coefficients of int_0^1 f''(s)^2 ds
-    (Gauss-Legendre, 32 nodes: exact for the degrees a file takes)."""
-    x, w = np.polynomial.legendre.leggauss(32)
-    s, w = (x + 1.0) / 2.0, w / 2.0
-    rows = []
-    for key in PROFILES:
-        found = _profile_columns(key, free, "roughness")
-        if found is None:
-            continue
-        idx, order = found
-        block = np.zeros((s.size, len(free)))
-        block[:, idx] = np.sqrt(w)[:, None] * _basis(key, s, len(idx) - 1, 2)[:, order]
-        rows.append(block)
-    if not rows:
-        raise ParameterError(f"roughness: it acts on a profile of free coefficients "
-                             f"({', '.join(PROFILES)}); none is free")
-    return np.concatenate(rows)
-
-
-def _limits(bounds: dict, free, p0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(A, lo, hi) with lo <= A p <= hi: a free input's bounds a row of the identity, a
-    profile's bounds its basis at 101 points of s times its free coefficients."""
-    rows, lo, hi = [], [], []
-    for key, pair in bounds.items():
-        try:
-            a, b = (float(v) for v in pair)
-        except (TypeError, ValueError):
-            raise ParameterError(f"bounds {key}: a pair (lo, hi), got {pair!r:.60}") from None
-        if not a < b:
-            raise ParameterError(f"bounds {key}: lo < hi, got ({a:g}, {b:g})")
-        if key in free:
-            rows.append(np.eye(len(free))[free.index(key)][None])
-        elif key in PROFILES:
-            found = _profile_columns(key, free, "bounds")
-            if found is None:
-                raise ParameterError(f"bounds {key}: free its coefficients ({key}.0, ...)")
-            idx, order = found
-            s = np.linspace(0.0, 1.0, 101)
-            block = np.zeros((s.size, len(free)))
-            block[:, idx] = _basis(key, s, len(idx) - 1)[:, order]
-            rows.append(block)
-        else:
-            raise ParameterError(f"bounds: {key!r} is not free ({', '.join(free)}) nor a "
-                                 f"profile of free coefficients ({', '.join(PROFILES)})")
-        lo += [a] * len(rows[-1])
-        hi += [b] * len(rows[-1])
-    A = np.concatenate(rows) if rows else np.zeros((0, len(free)))
-    lo, hi = np.array(lo, float), np.array(hi, float)
-    if np.any(A @ p0 < lo) or np.any(A @ p0 > hi):
-        raise ParameterError("bounds: the start (the scene's values) lies outside them")
-    return A, lo, hi
 
 
 def _cases(cases: dict | None, free) -> tuple[tuple, np.ndarray]:
