@@ -157,6 +157,24 @@ def test_bad_target_files_exit_2_with_one_line(tmp_path, header, rows, words):
     assert len(lines) == 1 and "target-shape" in lines[0] and words in lines[0]
 
 
+@pytest.mark.parametrize("header", ["s,x,z", "s,x,z,tangent_deg", "s,tangent_deg,x,z"])
+def test_a_target_file_of_centreline_points(tmp_path, header):
+    """A target file's columns by its header: the angles and the points (x, z) come back as
+    written, in any order after s."""
+    from jaxrod.cli.shape_design import read_target
+
+    names = header.split(",")
+    rows = [{"s": s, "x": 0.1 * s, "z": 0.9 * s, "tangent_deg": 10.0 * s} for s in (0, .5, 1)]
+    path = _target_csv(tmp_path / "t.csv", [[r[c] for c in names] for r in rows], header)
+    s, angles, points = read_target(str(path))
+    np.testing.assert_array_equal(s, [0.0, 0.5, 1.0])
+    np.testing.assert_array_equal(points, [[0.0, 0.0], [0.05, 0.45], [0.1, 0.9]])
+    if "tangent_deg" in names:
+        np.testing.assert_array_equal(angles, [0.0, 5.0, 10.0])
+    else:
+        assert angles is None
+
+
 def test_a_strength_profile_places_a_fold_at_a_field_angle(tmp_path):
     """A design through the folds (``jr.design_folds``) with a profile's coefficient free:
     the hard-magnetic cantilever (load 5, folds at 212.15 and 147.85 degrees with a uniform
