@@ -141,3 +141,24 @@ def framed_discretisation(n: int, support: str = "clamped",
     m = 2 * int(n) + 2 if quad_degree is None else int(quad_degree)
     arrays = _framed_arrays(int(n), support, m)
     return FramedDiscretisation(int(n), support, *(jax.device_put(a) for a in arrays))
+
+
+def twist_and_writhe(disc: FramedDiscretisation, x, turns=0.0) -> tuple[jax.Array, jax.Array]:
+    """(Tw, Wr) of the state x: the twist Tw = (1 / 2 pi) int_0^1 u3 ds and the writhe by
+    Fuller's formula relative to the straight rod along e3,
+
+        Wr = (1 / 2 pi) int_0^1 (e3 x d3) . d3' / (1 + e3 . d3) ds,
+
+    valid while d3 never points along -e3 (the chart's |v| < pi). Their sum is the linking
+    number, which a rod clamped at both ends keeps at the far end's turns
+    (Calugareanu-White-Fuller; checked in the tests)."""
+    jets = disc.jets(x, turns)
+
+    def densities(a):
+        _, u = framed_jet(a)
+        d3, dd3 = jax.jvp(lambda q: frame(q[0], q[1], q[2])[:, 2], (a[:3],), (a[3:],))
+        return jnp.stack([u[2], jnp.dot(jnp.cross(jnp.array([0.0, 0.0, 1.0]), d3), dd3)
+                          / (1.0 + d3[2])])
+
+    tw, wr = (disc.integrate(c) / (2.0 * jnp.pi) for c in jax.vmap(densities)(jets).T)
+    return tw, wr
