@@ -380,14 +380,13 @@ def _targets(s, target_deg, target_xz, K: int):
     points = None if target_xz is None else np.asarray(target_xz, float)
     if points is not None and points.ndim == 2:
         points = points[None]
-    numbers = s.size * ((angles is not None) + 2 * (points is not None))
+    fewest = MIN_POINTS if points is None else 1
     if (angles is not None and angles.shape != (K, s.size)) or \
-            (points is not None and points.shape != (K, s.size, 2)) or numbers < MIN_POINTS:
+            (points is not None and points.shape != (K, s.size, 2)) or s.size < fewest:
         raise ParameterError(
-            f"target: at least {MIN_POINTS} points (s, tangent_deg), or {MIN_POINTS} numbers "
-            f"with the centreline's (x, z) (a tip pose: s = [1]), one row per load case "
-            f"({K}) of len(s) = {s.size}, got angles {np.shape(target_deg)}, points "
-            f"{np.shape(target_xz)}")
+            f"target: at least {MIN_POINTS} points (s, tangent_deg), or one with the "
+            f"centreline's (x, z) (a tip: s = [1]), one row per load case ({K}) of len(s) = "
+            f"{s.size}, got angles {np.shape(target_deg)}, points {np.shape(target_xz)}")
     if not (np.all(np.isfinite(s)) and all(np.all(np.isfinite(a)) for a in (angles, points)
                                              if a is not None)):
         raise ParameterError("target: s, the angles and the points must be finite (no NaN)")
