@@ -155,6 +155,8 @@ def lowest(r, lam):
     """The least of lam(r) sampled at increasing r: the smallest sample, or below it the
     vertex of the parabola through it and its two neighbours (an interior dip between
     samples)."""
+    if lam.shape[0] < 3:
+        return jnp.min(lam)
     i = jnp.clip(jnp.argmin(lam), 1, lam.shape[0] - 2)
     (x0, x1, x2), (y0, y1, y2) = (r[i - 1], r[i], r[i + 1]), \
         (lam[i - 1], lam[i], lam[i + 1])
