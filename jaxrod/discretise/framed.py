@@ -31,14 +31,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from functools import lru_cache
 
 import jax
 import jax.numpy as jnp
 
-from jaxrod import spectral
 from jaxrod.discretise.director import _series_or, _sinc_sqrt
-from jaxrod.params import ParameterError, check_degree
+from jaxrod.discretise.planar import PlanarDiscretisation, field_discretisation
+from jaxrod.params import ParameterError
 
 #: The framed rod's supports: the frame held at s = 0, or at both ends.
 FRAMED_SUPPORTS = ("clamped", "clamped-clamped")
@@ -73,23 +72,25 @@ def framed_jet(a):
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
 class FramedDiscretisation:
-    """The frame by the nodal values of v1, v2 and psi, stacked as x = [v1; v2; psi].
+    """The frame by the nodal values of v1, v2 and psi, stacked as x = [v1; v2; psi], each a
+    ``field`` (``jaxrod.discretise.planar.field_discretisation``); ``jet_matrix`` (m + 1,
+    6, size) takes x to the jets, ``lift(turns)`` adds the far end's turns
+    (clamped-clamped)."""
 
-    ``to_quad`` / ``to_quad_diff``: (m + 1, free) a field's free nodal values to its values
-    and derivatives at the fine nodes; ``jet_matrix`` (m + 1, 6, size) takes x to the jets;
-    ``lift(turns)`` adds the far end's turns (clamped-clamped)."""
+    field: PlanarDiscretisation
 
-    n: int = dataclasses.field(metadata=dict(static=True))
-    support: str = dataclasses.field(metadata=dict(static=True))
-    quad_nodes: jax.Array
-    quad_weights: jax.Array
-    to_quad: jax.Array
-    to_quad_diff: jax.Array
+    @property
+    def support(self) -> str:
+        return self.field.support
+
+    @property
+    def quad_nodes(self) -> jax.Array:
+        return self.field.quad_nodes
 
     @property
     def free(self) -> int:
         """Free nodal values of one field."""
-        return self.to_quad.shape[1]
+        return self.field.size
 
     @property
     def size(self) -> int:
@@ -97,7 +98,7 @@ class FramedDiscretisation:
 
     @property
     def jet_matrix(self) -> jax.Array:
-        P, Pd = self.to_quad, self.to_quad_diff
+        P, Pd = self.field.to_quad, self.field.to_quad_diff
         Z = jnp.zeros_like(P)
         blocks = [(P, Z, Z), (Z, P, Z), (Z, Z, P), (Pd, Z, Z), (Z, Pd, Z), (Z, Z, Pd)]
         return jnp.stack([jnp.concatenate(b, axis=1) for b in blocks], axis=1)
@@ -117,30 +118,17 @@ class FramedDiscretisation:
 
     def integrate(self, f_quad):
         """int_0^1 f ds from values at the fine nodes."""
-        return f_quad @ self.quad_weights
-
-
-@lru_cache(maxsize=32)
-def _framed_arrays(n: int, support: str, quad_degree: int):
-    quad_nodes = spectral.chebyshev_nodes(quad_degree)
-    interp = spectral.interpolation_matrix(n, quad_nodes)
-    diff = interp @ spectral.differentiation_matrix(n)
-    keep = slice(1, n) if support == "clamped-clamped" else slice(1, n + 1)
-    return (quad_nodes, spectral.clenshaw_curtis_weights(quad_degree), interp[:, keep],
-            diff[:, keep])
+        return self.field.integrate(f_quad)
 
 
 def framed_discretisation(n: int, support: str = "clamped",
                           quad_degree: int | None = None) -> FramedDiscretisation:
     """Degree-n discretisation of the frame (n >= 4) for a support of ``FRAMED_SUPPORTS``;
     ``quad_degree`` (default 2n + 2) the fine Clenshaw-Curtis grid's degree."""
-    n = check_degree(n)
     if support not in FRAMED_SUPPORTS:
         raise ParameterError(f"support: one of {', '.join(FRAMED_SUPPORTS)} for a framed rod, "
                              f"got {support!r}")
-    m = 2 * int(n) + 2 if quad_degree is None else int(quad_degree)
-    arrays = _framed_arrays(int(n), support, m)
-    return FramedDiscretisation(int(n), support, *(jax.device_put(a) for a in arrays))
+    return FramedDiscretisation(field_discretisation(n, support, quad_degree))
 
 
 def twist_and_writhe(disc: FramedDiscretisation, x, turns=0.0) -> tuple[jax.Array, jax.Array]:

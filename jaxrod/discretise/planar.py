@@ -71,7 +71,7 @@ class PlanarDiscretisation:
     @property
     def size(self) -> int:
         """Number of unknowns."""
-        return self.n if self.support == "clamped" else self.n + 1
+        return self.to_full.shape[1]
 
     @property
     def jet_matrix(self) -> jax.Array:
@@ -110,15 +110,15 @@ def _planar_arrays(n: int, support: str, quad_degree: int):
     quad_nodes = spectral.chebyshev_nodes(quad_degree)
     interp = spectral.interpolation_matrix(n, quad_nodes)
     diff = spectral.differentiation_matrix(n)
-    first = 1 if support == "clamped" else 0
-    to_full = np.eye(n + 1)[:, first:]
+    # the free nodes: all, all but s = 0 (clamped), all but both ends (clamped-clamped)
+    free = slice(0 if support == "pinned" else 1, n if support == "clamped-clamped" else n + 1)
     return (
         nodes,
         quad_nodes,
         spectral.clenshaw_curtis_weights(quad_degree),
-        interp[:, first:],
-        (interp @ diff)[:, first:],
-        to_full,
+        interp[:, free],
+        (interp @ diff)[:, free],
+        np.eye(n + 1)[:, free],
         spectral.cumulative_integration_matrix(n),
     )
 
@@ -132,8 +132,16 @@ def planar_discretisation(n: int, support: str = "clamped",
     Paper: the planar ansatz d3 = sin(theta) e1 + cos(theta) e3 with the supports of eq.
     ``clamped_bc`` (clamped: theta(0) = 0).
     """
-    n = check_degree(n)
     check_support(support)
+    return field_discretisation(n, support, quad_degree)
+
+
+def field_discretisation(n: int, support: str,
+                         quad_degree: int | None = None) -> PlanarDiscretisation:
+    """One scalar field on the degree-n grid with the ends that ``support`` holds at zero
+    ("pinned": none, "clamped": s = 0, "clamped-clamped": both; the last for a framed
+    rod's fields, ``jaxrod.discretise.framed``)."""
+    n = check_degree(n)
     m = 2 * int(n) + 2 if quad_degree is None else int(quad_degree)
     arrays = _planar_arrays(int(n), support, m)
     # device_put, not jnp.asarray: the latter compiles a copy program per new shape

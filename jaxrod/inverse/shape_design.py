@@ -141,9 +141,7 @@ def l2_metric(disc) -> np.ndarray:
     nodal values): the eigenvalues of G^-1 H G^-T solve H v = lambda M v, the second
     variation per unit int dtheta^2 ds, independent of N (pi^2 / 4 for the unloaded
     clamped-free rod of unit stiffness)."""
-    to_quad = np.asarray(disc.to_quad)
-    gram = to_quad.T @ (np.asarray(disc.quad_weights)[:, None] * to_quad)
-    return np.linalg.inv(np.linalg.cholesky(gram))
+    return np.linalg.inv(np.linalg.cholesky(np.asarray(disc.mass_matrix())))
 
 
 def l2_smallest(hessian, metric):
