@@ -8,8 +8,6 @@ imports only what a command needs). Importing jaxrod switches JAX to float64.
 
 from __future__ import annotations
 
-import importlib
-import importlib.metadata
 import sys
 
 from jaxrod import progress as _progress
@@ -28,6 +26,10 @@ else:
     _progress.raise_pending()
 
 jax.config.update("jax_enable_x64", True)
+
+# imported once the guard above is in place: importlib.metadata alone takes tens of ms
+import importlib  # noqa: E402
+import importlib.metadata  # noqa: E402
 
 try:
     __version__ = importlib.metadata.version("jaxrod")
