@@ -144,6 +144,13 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "tilted_track": ("jaxrod.three_d.track", "tilted_track"),
         "track": ("jaxrod.three_d.track", "trace_track"),
     },
+    "Twisted rods (both ends held)": {
+        "TwistedRod": ("jaxrod.twisted.rod", "TwistedRod"),
+        "twist_branch": ("jaxrod.twisted.branch", "twist_branch"),
+        "twisted_equilibrium": ("jaxrod.twisted.branch", "twisted_equilibrium"),
+        "TwistBranch": ("jaxrod.twisted.branch", "TwistBranch"),
+        "TwistState": ("jaxrod.twisted.branch", "TwistState"),
+    },
     "Fold curves, the cusp and design maps": {
         "fold_curves": ("jaxrod.bistability.fold_curves", "fold_curves"),
         "cusp": ("jaxrod.bistability.fold_curves", "find_cusp"),

@@ -19,7 +19,7 @@ LAYERS = [
     {"equilibria"},
     {"uniform"},
     {"magnet"},
-    {"three_d", "bistability", "dynamics"},
+    {"three_d", "bistability", "dynamics", "twisted"},
     {"inverse"},
     {"plotting", "reproduce"},
     {"cli"},

@@ -82,6 +82,17 @@ class RawBranch(NamedTuple):
     rejected_steps: jax.Array
 
 
+def empty_branch(capacity: int, m: int) -> RawBranch:
+    """The record of a run before its first point: ``capacity`` rows of m unknowns, NaN."""
+    nan = jnp.full(capacity, jnp.nan)
+    return RawBranch(
+        x=jnp.full((capacity, m), jnp.nan), lam=nan, tangent_lam=nan,
+        tangent_x=jnp.full((capacity, m), jnp.nan), min_eig=nan,
+        morse_index=jnp.full(capacity, -1), newton_iterations=jnp.full(capacity, -1),
+        residual_norm=nan, num_points=jnp.asarray(0), status=jnp.asarray(int(RUNNING)),
+        rejected_steps=jnp.asarray(0))
+
+
 def _wdot(a, b, m):
     return jnp.dot(a[:-1], b[:-1]) / m + a[-1] * b[-1]
 
@@ -163,13 +174,7 @@ def continuation_run(energy: Energy, x0, lam0, args, opts: ContinuationOptions, 
     system = _Equilibria(model, m, spectrum, y0.dtype)
     # the first tangent is oriented so that d lam has the sign of direction
     orient = jnp.zeros(m + 1, y0.dtype).at[-1].set(jnp.sign(direction))
-    nan = jnp.full(capacity, jnp.nan)
-    out = RawBranch(
-        x=jnp.full((capacity, m), jnp.nan), lam=nan, tangent_lam=nan,
-        tangent_x=jnp.full((capacity, m), jnp.nan), min_eig=nan,
-        morse_index=jnp.full(capacity, -1), newton_iterations=jnp.full(capacity, -1),
-        residual_norm=nan, num_points=jnp.asarray(0), status=jnp.asarray(int(RUNNING)),
-        rejected_steps=jnp.asarray(0))
+    out = empty_branch(capacity, m)
     control = StepControl(opts.ds, opts.ds_min, opts.ds_max, opts.growth, opts.tol,
                           opts.max_folds)
     out, num, status, rejected = arclength_run(
