@@ -130,3 +130,23 @@ def test_pyelastica_helical_buckling_state_is_the_localised_helix():
     assert np.max(np.abs(radius - expected)) <= 2 * amplitude / np.cosh(k / 2)
     assert abs(r[-1, 2] - 0.97) <= 1e-12 and np.max(np.abs(r[-1, :2])) <= 1e-12
     jax.clear_caches()
+
+
+def test_the_assembled_linearisation_is_the_lagrangians_derivatives():
+    """The branch's residual and Jacobian, assembled from the nodes' 6 x 6 Hessians, equal
+    autodiff of the Lagrangian (the definition: energy, the far end's three constraints and
+    the phase condition) at a random point of an anisotropic rod, to round-off (1e-12
+    against entries of ~100)."""
+    from jaxrod.twisted import branch
+
+    rod = TwistedRod(twist_ratio=0.6, bending_ratio=1.3, shortening=0.1, n=8)
+    disc, k = rod.discretisation(), rod.constraints
+    w = np.random.default_rng(1).normal(size=disc.size + k + 2) * 0.3
+    aux = branch._phase(jax.numpy.asarray(w[:disc.size] + 0.1), disc)
+    data, m = (disc, rod.inputs()), disc.size + k + 1
+    grad = jax.grad(branch._lagrangian)
+    R, J = jax.jit(branch._linearise, static_argnums=3)(w, aux, data, k)
+    reference = jax.jit(lambda *a: (grad(*a), jax.jacfwd(grad)(*a)), static_argnums=3)
+    R0, J0 = reference(w, aux, data, k)
+    np.testing.assert_allclose(R, R0[:m], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(J, J0[:m], rtol=0, atol=1e-12)

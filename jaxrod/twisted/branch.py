@@ -30,7 +30,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod import spectral
-from jaxrod.discretise.framed import FramedDiscretisation, twist_and_writhe
+from jaxrod.discretise.framed import (
+    FramedDiscretisation,
+    frame,
+    framed_jet,
+    twist_and_writhe,
+)
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.solvers.arclength import StepControl, arclength_run
@@ -52,6 +57,7 @@ from jaxrod.twisted.rod import (
 
 
 def _lagrangian(w, aux, data, count: int):
+    """Lambda (module docstring): its derivatives are assembled by ``_linearise``."""
     disc, inputs = data
     x_ref, c = aux
     size = disc.size
@@ -59,6 +65,45 @@ def _lagrangian(w, aux, data, count: int):
     return (energy(x, turns, disc, inputs)
             + MULTIPLIER_UNIT * jnp.dot(mu, far_end(x, disc, inputs, count))
             + nu * jnp.dot(c, x - x_ref))
+
+
+def _linearise(w, aux, data, count: int):
+    """(grad_z Lambda, [Hess_z Lambda | d grad_z Lambda / d turns]) assembled from the
+    nodes: Lambda = sum_j q_j phi(a_j, mu) - U mu_z (1 - e) + nu c . (x - x_ref), the jets
+    a_j = L_j x + l_j turns, phi = the energy density + U mu . d3(a)[:count]; so the
+    Hessian is sum_j q_j L_j^T phi_aa L_j, bordered by the constraints' gradients and c
+    (the same numbers as autodiff of ``_lagrangian``, without its cost)."""
+    disc, inputs = data
+    x_ref, c = aux
+    size = disc.size
+    x, mu, nu, turns = w[:size], w[size:size + count], w[size + count], w[-1]
+    L, q = disc.jet_matrix, disc.field.quad_weights
+    jets = disc.jets(x, turns)
+    per_turn = disc.lift(1.0)  # d a_j / d turns
+
+    def phi(a, mu):
+        gamma, beta, tension = inputs[0], inputs[1], inputs[2]
+        F, u = framed_jet(a)
+        return (0.5 * (u[0] ** 2 + beta * u[1] ** 2 + gamma * u[2] ** 2) - tension * F[2, 2]
+                + MULTIPLIER_UNIT * jnp.dot(mu, F[:count, 2]))
+
+    grad_a = jax.vmap(jax.grad(phi), in_axes=(0, None))(jets, mu)
+    hess_a = jax.vmap(jax.hessian(phi), in_axes=(0, None))(jets, mu)
+    d3_a = jax.vmap(jax.jacfwd(lambda a: frame(a[0], a[1], a[2])[:count, 2]))(jets)
+    d3 = jax.vmap(lambda a: frame(a[0], a[1], a[2])[:count, 2])(jets)
+    held = jnp.zeros(count).at[2].set(1.0 - inputs[3]) if count == 3 else jnp.zeros(count)
+    Lq = L * q[:, None, None]
+    r_x = jnp.einsum("jrm,jr->m", Lq, grad_a) + nu * c
+    r_mu = MULTIPLIER_UNIT * (q @ d3 - held)
+    r_nu = jnp.dot(c, x - x_ref)
+    H_xx = jnp.einsum("jrm,jrs,jsn->mn", Lq, hess_a, L)
+    H_xmu = MULTIPLIER_UNIT * jnp.einsum("jrm,jkr->mk", Lq, d3_a)
+    col_x = jnp.einsum("jrm,jrs,js->m", Lq, hess_a, per_turn)
+    col_mu = MULTIPLIER_UNIT * jnp.einsum("j,jkr,jr->k", q, d3_a, per_turn)
+    top = jnp.hstack([H_xx, H_xmu, c[:, None], col_x[:, None]])
+    middle = jnp.hstack([H_xmu.T, jnp.zeros((count, count + 1)), col_mu[:, None]])
+    bottom = jnp.concatenate([c, jnp.zeros(count + 2)])[None, :]
+    return jnp.concatenate([r_x, r_mu, r_nu[None]]), jnp.vstack([top, middle, bottom])
 
 
 def _phase(x, disc):
@@ -89,9 +134,7 @@ class _TwistSystem:
         return jnp.dot(self.weights * a, b)
 
     def linearise(self, w, aux, data):
-        grad = jax.grad(_lagrangian)
-        return grad(w, aux, data, self.count)[:self.m], \
-            jax.jacfwd(grad)(w, aux, data, self.count)[:self.m]
+        return _linearise(w, aux, data, self.count)
 
     def accepted(self, w, aux, J):
         new = _phase(w[:self.size], self.data[0])
@@ -127,9 +170,8 @@ def _solve_at(size: int, count: int, data, w0):
     m = size + count + 1
 
     def linearise(z, _):
-        w = jnp.append(z, w0[-1])
-        grad = jax.grad(_lagrangian)
-        return grad(w, aux, data, count)[:m], jax.jacfwd(grad)(w, aux, data, count)[:m, :m]
+        R, J = _linearise(jnp.append(z, w0[-1]), aux, data, count)
+        return R, J[:, :m]
 
     res = newton(None, w0[:m], None, tol=1e-10, linearise=linearise, keep_jacobian=True,
                  max_steps=60)
