@@ -36,6 +36,7 @@ from jaxrod.discretise.framed import (
     framed_jet,
     twist_and_writhe,
 )
+from jaxrod.equilibria.resolution import TOLERANCE
 from jaxrod.params import ParameterError
 from jaxrod.programs import jit
 from jaxrod.solvers.arclength import StepControl, arclength_run
@@ -208,6 +209,15 @@ class TwistState:
     def x(self) -> np.ndarray:
         return self.w[:3 * (self.rod.n - 1)]
 
+    @property
+    def status(self) -> Status:
+        """NOT_CONVERGED, UNDER_RESOLVED (converged, but the fields' Chebyshev tail is above
+        ``jaxrod.equilibria.resolution.TOLERANCE``: raise n, e.g. by ``twisted_equilibrium``
+        with this state as its start; its stability count may be spurious) or SUCCESS."""
+        if not self.converged:
+            return Status.NOT_CONVERGED
+        return Status.UNDER_RESOLVED if self.tail > TOLERANCE else Status.SUCCESS
+
     def centreline(self) -> tuple[np.ndarray, np.ndarray]:
         """(s, r): the Chebyshev nodes and the centreline r(s) = int_0^s d3 there, (n + 1, 3)."""
         from jaxrod.twisted.rod import centreline
@@ -220,7 +230,8 @@ class TwistState:
                 "tension": self.tension, "twist": self.twist, "writhe": self.writhe,
                 "unstable": self.unstable, "converged": self.converged,
                 "residual": self.residual, "iterations": self.iterations,
-                "chebyshev_tail": self.tail, "n": self.rod.n}
+                "chebyshev_tail": self.tail, "n": self.rod.n,
+                "status": self.status.name.lower()}
 
 
 def _twist_measures(x, turns, disc, inputs):
@@ -255,8 +266,10 @@ def _states(rod: TwistedRod, disc: FramedDiscretisation, W, converged, residual,
 @dataclasses.dataclass(frozen=True)
 class TwistBranch:
     """A branch of a twisted rod in its end rotation: ``points`` (TwistState, in order),
-    ``folds`` (the indices where d(turns)/ds changes sign: the point before the turn),
-    ``status`` and its message."""
+    ``folds`` (the indices where d(turns)/ds changes sign: the point after the turn, located
+    to the step, not refined; a branch that reaches the straight rod, whose phase condition
+    degenerates there, may show its branch point as such a turn), ``status`` and its
+    message."""
 
     rod: TwistedRod
     points: list[TwistState]
@@ -320,9 +333,10 @@ def twist_branch(rod: TwistedRod, to_turns: float, *, start: TwistState | None =
     out = _run_program(disc.size, rod.constraints, max_points, (disc, rod.inputs()),
                        jnp.asarray(w0), jnp.array([lo - 1e-12, hi + 1e-12]), control)
     num = int(out.num_points)
-    W = np.column_stack([np.asarray(out.x[:num]), np.asarray(out.lam[:num])])
-    points = _states(rod, disc, W, np.ones(num, bool), np.asarray(out.residual_norm[:num]),
-                     np.asarray(out.newton_iterations[:num]), np.asarray(out.morse_index[:num]))
+    # the whole fixed-capacity record (NaN beyond num): one measuring program per capacity
+    W = np.column_stack([np.asarray(out.x), np.asarray(out.lam)])
+    points = _states(rod, disc, W, np.ones(max_points, bool), np.asarray(out.residual_norm),
+                     np.asarray(out.newton_iterations), np.asarray(out.morse_index))[:num]
     dturns = np.asarray(out.tangent_lam[:num])
     folds = [i for i in range(1, num) if dturns[i] * dturns[i - 1] < 0]
     status = int(out.status)
