@@ -15,6 +15,7 @@ m'^2) / (2 pi t'). Solved here by scipy's fsolve.
 import math
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -50,8 +51,8 @@ def test_the_branch_keeps_its_linking_number_and_its_end_moment_is_the_twist_at_
     turns) equals the constitutive moment about the axis at the far clamp, gamma u3(1),
     to 1e-8 (the far end's frame is turned about e3, so M . e3 = C u3 there; a pointwise
     value, it converges spectrally: 1e-4, 3e-7, 8e-10 at n = 16, 24, 32); the first
-    point's tension is the Euler elastica's thrust, negative. A rod under tension control
-    refuses the default start, and a start of its own control under shortening control."""
+    point's tension is the Euler elastica's thrust, negative. A state under tension control
+    cannot start a rod under shortening control."""
     rod = TwistedRod(twist_ratio=0.7, shortening=0.1, n=32)
     branch = twist_branch(rod, 3.0, ds_max=1.0)
     assert branch.message.startswith("reached the end") and branch.points[-1].turns >= 3.0
@@ -64,9 +65,6 @@ def test_the_branch_keeps_its_linking_number_and_its_end_moment_is_the_twist_at_
     assert branch.points[0].tension < -4 * math.pi**2
     state = twisted_equilibrium(rod, 2.5, start=branch.points[0], ds_max=1.0)
     assert state.converged and abs(state.turns - 2.5) == 0.0
-    pulled = TwistedRod(twist_ratio=0.7, tension=10.0, n=32)
-    with pytest.raises(ParameterError, match="start"):
-        twist_branch(pulled, 1.0)
     on_tension = twisted_equilibrium(
         TwistedRod(twist_ratio=0.7, tension=state.tension, n=32), 2.5, start=state)
     assert on_tension.converged and abs(on_tension.twist_moment - state.twist_moment) <= 1e-9
@@ -134,21 +132,83 @@ def test_pyelastica_helical_buckling_state_is_the_localised_helix():
     jax.clear_caches()
 
 
+def _loaded_rod(**kwargs) -> TwistedRod:
+    """A rod under every kind of load the framed rod takes: gravity off the axis, a soft
+    wire's anisotropy, a programmed remanence in a tilted field, a magnet at the far end."""
+    from jaxrod.scenes.terms import Anisotropy, Gravity, PointDipole, ProgrammedMagnetisation
+
+    loads = {"gravity": Gravity(2.0, jnp.array([0.6, 0.0, -0.8])),
+             "soft": Anisotropy(1.5, jnp.array([0.0, 0.6, 0.8])),
+             "field": ProgrammedMagnetisation(3.0, 0.4, jnp.array([0.3, -0.5]),
+                                              jnp.array([1.0, 0.2])),
+             "magnet": PointDipole(0.7, jnp.array([0.5, 0.2, 2.5]))}
+    return TwistedRod(loads=loads, **kwargs)
+
+
 def test_the_assembled_linearisation_is_the_lagrangians_derivatives():
-    """The branch's residual and Jacobian, assembled from the nodes' 6 x 6 Hessians, equal
-    autodiff of the Lagrangian (the definition: energy, the far end's three constraints and
-    the phase condition) at a random point of an anisotropic rod, to round-off (1e-12
+    """The branch's residual and Jacobian, assembled from the nodes' 6 x 6 Hessians, the
+    far-end terms' 3 x 3 Hessian and the path's column by forward mode, equal autodiff of
+    the Lagrangian (the definition: energy with every kind of load, the far end's three
+    constraints, the phase condition on and pinned, a path through the turns and a field's
+    strength together) at a random point of an anisotropic rod, to round-off (1e-11
     against entries of ~100)."""
     from jaxrod.twisted import branch
 
-    rod = TwistedRod(twist_ratio=0.6, bending_ratio=1.3, shortening=0.1, n=8)
-    disc, k = rod.discretisation(), rod.constraints
+    rod = _loaded_rod(twist_ratio=0.6, bending_ratio=1.3, shortening=0.1, n=8)
+    disc, k, keys = rod.discretisation(), rod.constraints, ("turns", "field.load")
     w = np.random.default_rng(1).normal(size=disc.size + k + 2) * 0.3
-    aux = branch._phase(jax.numpy.asarray(w[:disc.size] + 0.1), disc)
-    data, m = (disc, rod.inputs()), disc.size + k + 1
+    x_ref, c, _ = branch._phase(jnp.asarray(w[:disc.size] + 0.1), disc, True)
+    data, m = branch._Path(keys, (0.0, 0.0), (1.0, 2.5)).data(rod, 0.3, disc), \
+        disc.size + k + 1
     grad = jax.grad(branch._lagrangian)
-    R, J = jax.jit(branch._linearise, static_argnums=3)(w, aux, data, k)
-    reference = jax.jit(lambda *a: (grad(*a), jax.jacfwd(grad)(*a)), static_argnums=3)
-    R0, J0 = reference(w, aux, data, k)
-    np.testing.assert_allclose(R, R0[:m], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(J, J0[:m], rtol=0, atol=1e-12)
+    assembled = jax.jit(branch._linearise, static_argnums=(3, 4))
+    reference = jax.jit(lambda *a: (grad(*a), jax.jacfwd(grad)(*a)), static_argnums=(3, 4))
+    for on in (1.0, 0.0):
+        aux = (x_ref, c * on, jnp.asarray(on))
+        R, J = assembled(w, aux, data, keys, k)
+        R0, J0 = reference(w, aux, data, keys, k)
+        np.testing.assert_allclose(R, R0[:m], rtol=0, atol=1e-11)
+        np.testing.assert_allclose(J, J0[:m], rtol=0, atol=1e-11)
+
+
+def test_the_straight_rods_branch_points_are_the_greenhill_moments():
+    """The straight rod turned from 0 to 4 turns at n = 16 under tension t = 10 and -10: the
+    branch's count of unstable directions jumps by 2 (the rotational symmetry's
+    two-dimensional kernel, where a determinant would not change sign); the first branch
+    point's twisting moment is the linearised equations' (the determinant method of
+    tests/test_framed.py) to 1e-8. At t = 10 half the pull is a field b = 5 along the axis
+    on the rod's axial remanence (energy -b int d3 . e3: a dead load). The bent branch
+    leaves the branch point subcritically (toward fewer turns), one direction unstable."""
+    from test_framed import _critical_moment_by_determinant
+
+    from jaxrod.scenes.terms import Zeeman
+    from jaxrod.twisted.branch import switch_branch
+
+    for t, b in ((10.0, 5.0), (-10.0, 0.0)):
+        rod = TwistedRod(twist_ratio=0.769, tension=t - b, n=16, loads={"field": Zeeman(b)})
+        branch = twist_branch(rod, 4.0)
+        assert branch.complete and not branch.folds
+        first = branch.branch_points[0]
+        assert first.converged and first.unstable == (0, 2)
+        assert abs(first.state.twist_moment / _critical_moment_by_determinant(t) - 1) <= 1e-8
+    bent = switch_branch(first, 0.0, ds_max=0.3)
+    assert bent.complete and all(p.unstable == 1 for p in bent.points)
+    assert all(p.converged and p.residual <= 1e-10 for p in bent.points)
+    assert bent.points[1].turns < first.state.turns
+
+
+def test_an_axial_field_changes_nothing_under_shortening_control_but_the_reaction():
+    """A hard-magnetic rod magnetised along its tangent in a field b = 5 along the axis,
+    its far end held at 1 - e and turned once (the state reached by turning while
+    approaching, n = 16): the field's energy -b int d3 . e3 is constant, so the state and
+    its moment are those without the field (to Newton's tolerance), and the clamp's
+    reaction is less by b."""
+    from jaxrod.scenes.terms import Zeeman
+
+    states = [twisted_equilibrium(TwistedRod(twist_ratio=0.7, shortening=0.1, n=16,
+                                             loads={"field": Zeeman(b)}), 1.0)
+              for b in (5.0, 0.0)]
+    assert all(s.converged for s in states)
+    assert abs(states[0].twist_moment - states[1].twist_moment) <= 1e-9
+    assert abs(states[0].tension - (states[1].tension - 5.0)) <= 1e-8
+    np.testing.assert_allclose(states[0].x, states[1].x, rtol=0, atol=1e-9)

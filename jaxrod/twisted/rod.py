@@ -38,7 +38,6 @@ from jaxrod.discretise.framed import (
     FramedDiscretisation,
     frame,
     framed_discretisation,
-    framed_jet,
 )
 from jaxrod.params import ParameterError
 
@@ -65,6 +64,7 @@ class TwistedRod:
     tension: float | None = None
     shortening: float | None = None
     n: int = 48
+    loads: dict = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
         for name in ("twist_ratio", "bending_ratio"):
@@ -80,6 +80,24 @@ class TwistedRod:
             raise ParameterError(f"shortening: in (0, 1), got {self.shortening!r}")
         if not isinstance(self.n, (int, np.integer)) or self.n < 8:
             raise ParameterError(f"n: an integer >= 8, got {self.n!r}")
+        if not isinstance(self.loads, dict):
+            raise ParameterError("loads: a dict of scene terms by name")
+        for name, t in self.loads.items():
+            if not hasattr(t, "term_name") or getattr(t, "elastic", False):
+                raise ParameterError(f"loads: {name!r} is not a load term of "
+                                     "jaxrod.scenes.terms (the rod's own energy is built in)")
+            if t.distributed is not None:
+                raise ParameterError(f"loads: {name!r} ({t.term_name}) acts on the positions "
+                                     "along the rod; the rod held at both ends takes density "
+                                     "and end terms (uniform fields, gravity, magnets acting "
+                                     "on the far end)")
+
+    @property
+    def symmetric(self) -> bool:
+        """Whether turning a bent state about the axis keeps the energy: an isotropic section
+        (B2 = B1) and every load unchanged by rotations about e3 (host side, concrete
+        inputs). Then each bent equilibrium lies on a circle of them."""
+        return self.bending_ratio == 1.0 and all(_axial(t) for t in self.loads.values())
 
     @classmethod
     def from_poisson_ratio(cls, poisson_ratio: float, **kwargs) -> TwistedRod:
@@ -101,21 +119,106 @@ class TwistedRod:
     def discretisation(self, n: int | None = None) -> FramedDiscretisation:
         return framed_discretisation(self.n if n is None else n, "clamped-clamped")
 
+    def replace(self, key: str, value: float) -> TwistedRod:
+        """A copy with the input ``key`` (``INPUTS`` or a load's "term.field[.i]") set."""
+        if key in ("twist_ratio", "bending_ratio", "tension", "shortening"):
+            return dataclasses.replace(self, **{key: float(value)})
+        name, field, index = _load_key(self, key)
+        t = self.loads[name]
+        if index is not None:
+            array = np.asarray(getattr(t, field), float).copy()
+            array[index] = value
+            value = array
+        else:
+            value = float(value)
+        loads = dict(self.loads)
+        loads[name] = dataclasses.replace(t, **{field: value})
+        return dataclasses.replace(self, loads=loads)
+
     def inputs(self) -> jax.Array:
         """(gamma, beta, t, e): the traced inputs of ``lagrangian``."""
         return jnp.array([self.twist_ratio, self.bending_ratio, self.tension or 0.0,
                           self.shortening or 0.0])
 
 
-def energy(x, turns, disc: FramedDiscretisation, inputs) -> jax.Array:
-    """E(x; turns) (module docstring)."""
+#: The rod's own inputs, by name, in the order of ``TwistedRod.inputs``.
+INPUTS = ("twist_ratio", "bending_ratio", "tension", "shortening")
+
+
+def _axial(t) -> bool:
+    """Whether the load term ``t`` is unchanged by rotations about e3 (concrete inputs)."""
+    name = t.term_name
+    if name in ("gravity", "anisotropy"):
+        d = np.asarray(t.direction, float)
+        return bool(abs(d[0]) + abs(d[1]) == 0.0)
+    if name == "zeeman":
+        return bool(math.sin(float(t.angle)) == 0.0 or float(t.load) == 0.0)
+    if name == "programmed":
+        return bool(math.sin(float(t.angle)) == 0.0 and not np.any(np.asarray(t.profile)))
+    return False
+
+
+def _load_key(rod: TwistedRod, key: str) -> tuple[str, str, int | None]:
+    """(term, field, index) of a load input "term.field[.i]"; ParameterError naming it."""
+    parts = key.split(".")
+    fields = [f.name for f in dataclasses.fields(rod.loads[parts[0]])] \
+        if parts[0] in rod.loads else []
+    ok = len(parts) in (2, 3) and parts[1] in fields
+    if ok:
+        shape = np.shape(getattr(rod.loads[parts[0]], parts[1]))
+        ok = (len(parts) == 2 and shape == ()) or (
+            len(parts) == 3 and parts[2].isdigit() and len(shape) == 1
+            and int(parts[2]) < shape[0])
+    if not ok:
+        keys = ["turns", *INPUTS] + [f"{n}.{f.name}" for n, t in rod.loads.items()
+                                     for f in dataclasses.fields(t)]
+        raise ParameterError(f"vary: {key!r} is not an input of this rod; its inputs: "
+                             f"{', '.join(keys)}")
+    return parts[0], parts[1], int(parts[2]) if len(parts) == 3 else None
+
+
+def framed_jet3(a):
+    """(F, F', u) at one node from its jet (``jaxrod.discretise.framed.framed_jet``)."""
+    F, dF = jax.jvp(lambda q: frame(q[0], q[1], q[2]), (a[:3],), (a[3:],))
+    d1, d2, d3 = F[:, 0], F[:, 1], F[:, 2]
+    return F, dF, jnp.stack([jnp.dot(dF[:, 1], d3), jnp.dot(dF[:, 2], d1),
+                             jnp.dot(dF[:, 0], d2)])
+
+
+def density(a, s, inputs, loads: dict) -> jax.Array:
+    """The energy density at one node of jet a and arclength s: the rod's own
+    (u1^2 + beta u2^2 + gamma u3^2) / 2 - t d3 . e3, plus every load's density, written in
+    the director (d3, d3') or, where the term has a ``framed`` form (a remanence at an angle
+    in the material frame), in the frame."""
     gamma, beta, tension = inputs[0], inputs[1], inputs[2]
+    F, dF, u = framed_jet3(a)
+    e = 0.5 * (u[0] ** 2 + beta * u[1] ** 2 + gamma * u[2] ** 2) - tension * F[2, 2]
+    for t in loads.values():
+        if getattr(t, "framed", None) is not None:
+            e = e + t.framed(F, dF, s)
+        elif t.density is not None:
+            e = e + t.density(F[:, 2], dF[:, 2], s)
+    return e
 
-    def density(a):
-        F, u = framed_jet(a)
-        return 0.5 * (u[0] ** 2 + beta * u[1] ** 2 + gamma * u[2] ** 2) - tension * F[2, 2]
 
-    return disc.integrate(jax.vmap(density)(disc.jets(x, turns)))
+def endpoint(X, loads: dict) -> jax.Array:
+    """The loads' potential of the far end's position X = int d3 (0 without one)."""
+    terms = [t for t in loads.values() if t.endpoint is not None]
+    return sum((t.endpoint(X) for t in terms), jnp.zeros((), X.dtype))
+
+
+def tip(x, turns, disc: FramedDiscretisation) -> jax.Array:
+    """X = int_0^1 d3 ds."""
+    d3 = jax.vmap(lambda a: frame(a[0], a[1], a[2])[:, 2])(disc.jets(x, turns))
+    return disc.integrate(d3.T)
+
+
+def energy(x, turns, disc: FramedDiscretisation, inputs, loads: dict | None = None) -> jax.Array:
+    """E(x; turns) (module docstring) with the loads' terms."""
+    loads = {} if loads is None else loads
+    e = disc.integrate(jax.vmap(density, in_axes=(0, 0, None, None))(
+        disc.jets(x, turns), disc.quad_nodes, inputs, loads))
+    return e + endpoint(tip(x, turns, disc), loads)
 
 
 def far_end(x, disc: FramedDiscretisation, inputs, count: int) -> jax.Array:

@@ -12,7 +12,8 @@ mu(s) = sum_k d_k T_k(2 s - 1) (Chebyshev polynomials on [0, 1]: well conditione
 inputs of a design; [1] is the uniform remanence). Its moment balance is
 theta'' + load mu(s) sin(a - theta - phi(s)) = 0 with theta'(1) = 0. Unlike the tangent
 magnetisation (``zeeman``), it is no exact derivative along the rod: a density of the jet.
-Planar rods only (a 3D rod's director chart carries no d1).
+Planar rods, and rods that carry their frame (``framed``); the 3D director chart carries no
+d1.
 """
 
 from __future__ import annotations
@@ -50,6 +51,16 @@ class ProgrammedMagnetisation:
     def planar(self, theta, dtheta, s):
         """-load mu(s) cos(theta + phi(s) - a)."""
         return -self.load * self.mu(s) * jnp.cos(theta + self.phi(s) - self.angle)
+
+    def framed(self, F, dF, s):
+        """-load mu(s) b . (cos(phi) d3 + sin(phi) d1) on a rod that carries its frame
+        F = (d1, d2, d3) (``jaxrod.twisted``): the remanence in the material plane (d1, d3),
+        b = (sin a, 0, cos a). In the plane (d1 = (cos theta, 0, -sin theta)) it is
+        ``planar``."""
+        phi = self.phi(s)
+        m = jnp.cos(phi) * F[:, 2] + jnp.sin(phi) * F[:, 0]
+        b = jnp.stack([jnp.sin(self.angle), jnp.zeros_like(self.angle), jnp.cos(self.angle)])
+        return -self.load * self.mu(s) * jnp.dot(b, m)
 
     def density(self, d3, dd3, s):
         """The planar density from d3 = (sin theta, 0, cos theta) (in-plane rods only)."""
