@@ -185,7 +185,8 @@ def test_the_straight_rods_branch_points_are_the_greenhill_moments():
     from jaxrod.twisted.branch import switch_branch
 
     for t, b in ((10.0, 5.0), (-10.0, 0.0)):
-        rod = TwistedRod(twist_ratio=0.769, tension=t - b, n=16, loads={"field": Zeeman(b)})
+        rod = TwistedRod(twist_ratio=0.769, tension=t - b, n=16,
+                         loads={"field0": Zeeman(b)})
         branch = twist_branch(rod, 4.0)
         assert branch.complete and not branch.folds
         first = branch.branch_points[0]
@@ -212,3 +213,50 @@ def test_an_axial_field_changes_nothing_under_shortening_control_but_the_reactio
     assert abs(states[0].twist_moment - states[1].twist_moment) <= 1e-9
     assert abs(states[0].tension - (states[1].tension - 5.0)) <= 1e-8
     np.testing.assert_allclose(states[0].x, states[1].x, rtol=0, atol=1e-9)
+
+
+HELD = """
+units = "nondimensional"
+geometry = "3d"
+[rod]
+support = "clamped-clamped"
+twist_ratio = 0.769
+[ends]
+rotation_turns = 1.0
+tension = 5.0
+[magnetisation]
+kind = "hard"
+[[field]]
+kind = "uniform"
+load = 5.0
+angle_deg = 0.0
+"""
+
+
+def test_the_command_line_on_a_rod_held_at_both_ends(tmp_path):
+    """``jaxrod branch RIG --vary ends.rotation_turns --json`` on a scene file of the
+    clamped-clamped rod pulled by 5 and by a field of 5 on its axial remanence: its first
+    branch point (in turns) is where the straight rod's moment 2 pi gamma turns reaches the
+    determinant method's under tension 10, a two-dimensional kernel; ``jaxrod equilibrium``
+    prints the straight rod's twisting moment 2 pi gamma turns and the clamp's pull."""
+    import json
+
+    from command_line import run_cli
+    from test_framed import _critical_moment_by_determinant
+
+    rig = tmp_path / "held.toml"
+    rig.write_text(HELD)
+    proc = run_cli("branch", rig, "--vary", "ends.rotation_turns", "--from", "0", "--to",
+                   "2.5", "--n", "16", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    first = out["branch_points"][0]
+    moment = 2 * math.pi * 0.769 * first["value"]
+    assert abs(moment / _critical_moment_by_determinant(10.0) - 1) <= 1e-8
+    assert first["unstable"] == [0, 2] and first["kernel_dimension"] == 2
+    assert out["folds"] == [] and out["converged"] and out["value"][-1] >= 2.5
+    proc = run_cli("equilibrium", rig, "--n", "16", "--json")
+    out = json.loads(proc.stdout)
+    assert proc.returncode == 0 and out["status"] == "success" and out["stable"]
+    assert abs(out["twist_moment"] - 2 * math.pi * 0.769) <= 1e-12
+    assert out["tension"] == 5.0 and out["turns"] == 1.0

@@ -53,10 +53,10 @@ def uses_scene_file(args, vary_is_file_key: bool = True) -> bool:
     return False
 
 
-def _load(args):
+def _load(args, held: bool = False):
     from jaxrod.scenes.files import load
 
-    return load(args.rig, args.set)
+    return load(args.rig, args.set, held=held)
 
 
 def _range(args, file):
@@ -82,7 +82,11 @@ def cmd_equilibrium(args) -> int:
         raise ParameterError("rig: name a scene file (jaxrod equilibrium RIG.toml)")
     from jaxrod.equilibria.resolution import resolved_equilibrium
 
-    file = _load(args)
+    file = _load(args, held=True)
+    if file.twisted is not None:
+        from jaxrod.cli.held_rod import equilibrium_of_held
+
+        return equilibrium_of_held(args, file)
     r = resolved_equilibrium(file.scene, n=args.n)
     eq = r.equilibrium
     out = {"rig": args.rig, "set": args.set, **_at(eq.tip_angle_deg, eq.tip_position, file),
@@ -113,7 +117,16 @@ def branch_on_file(args) -> int:
             raise ParameterError(f"modes: degree {args.n} resolves the lowest 0 to "
                                  f"{resolvable(args.n)} modes (raise --n for more), got "
                                  f"{args.modes}")
-    file = _load(args)
+    file = _load(args, held=True)
+    if file.twisted is not None:
+        from jaxrod.cli.held_rod import branch_of_held
+
+        if args.vary is None or args.start is None or args.stop is None:
+            raise ParameterError("vary: give --vary KEY --from A --to B with a scene file")
+        file.input_of(args.vary)
+        if args.start == args.stop:
+            raise ParameterError(f"to: must differ from --from ({args.start:g})")
+        return branch_of_held(args, file, args.start, args.stop)
     key, start, stop, factor = _range(args, file)
     from jaxrod.equilibria.resolution import resolved_branch
 
@@ -247,9 +260,10 @@ def folds_on_file(args) -> int:
 def add_equilibrium(sub) -> None:
     e = sub.add_parser("equilibrium", help="the equilibrium of a rig given by a scene file")
     add_scene_file_inputs(e, vary=False)
-    e.add_argument("--n", type=_degree("N-magnet"), default=16,
-                   help="the first Chebyshev degree, 4-64 (default 16), raised until the "
-                   "state's Chebyshev tail is at most 1e-8 rad (else under_resolved)")
+    e.add_argument("--n", type=_degree("N-magnet"), default=None,
+                   help="the first Chebyshev degree, 4-64 (default 16; 48 for a rod held at "
+                   "both ends), raised until the state's Chebyshev tail is at most 1e-8 "
+                   "rad (else under_resolved)")
     e.add_argument("--json", action="store_true", help="print one JSON object")
-    e.set_defaults(func=cmd_equilibrium)
+    e.set_defaults(func=cmd_equilibrium, n_fallback=16)
 

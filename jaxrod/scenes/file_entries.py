@@ -91,9 +91,11 @@ def angle_profile(mag: dict, kind, geometry: str):
     if kind != "hard":
         fail(f"magnetisation.{key}", "only a hard magnetisation is programmed at an angle "
                                       "to the tangent")
-    if geometry != "planar":
+    if geometry == "3d":
         fail(f"magnetisation.{key}", "a programmed magnetisation needs geometry = "
-                                      "\"planar\" (the 3D rod's chart carries no d1)")
+                                      "\"planar\", or a rod that carries its frame (support "
+                                      "= \"clamped-clamped\"; the 3D cantilever's chart "
+                                      "carries no d1)")
     if key == "angle_deg":
         return np.radians([number(mag, "angle_deg", "magnetisation.")])
     return np.radians(coefficients(mag, "profile_deg", "magnetisation.",
@@ -125,8 +127,9 @@ def strength_profile(mag: dict, kind, geometry: str, fields):
     key = "magnetisation.strength_profile"
     if kind != "hard":
         fail(key, "only a hard magnetisation has a remanence profile")
-    if geometry != "planar":
-        fail(key, "a remanence profile needs geometry = \"planar\"")
+    if geometry == "3d":
+        fail(key, "a remanence profile needs geometry = \"planar\", or support = "
+                  "\"clamped-clamped\"")
     if any(f.get("kind") != "uniform" for f in fields):
         fail(key, "a remanence profile acts in uniform fields")
     return coefficients(mag, "strength_profile", "magnetisation.",

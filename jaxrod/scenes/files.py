@@ -77,8 +77,11 @@ from jaxrod.scenes.terms import (
 #: Allowed keys of each table, SI and nondimensional.
 TABLES = {
     "rod": {"si": ("length", "radius", "youngs_modulus", "support", "density",
-                   "stiffness_profile"),
-            "nondimensional": ("support", "stiffness_profile")},
+                   "stiffness_profile", "twist_ratio", "bending_ratio"),
+            "nondimensional": ("support", "stiffness_profile", "twist_ratio",
+                               "bending_ratio")},
+    "ends": {"si": ("rotation_turns", "tension", "shortening"),
+             "nondimensional": ("rotation_turns", "tension", "shortening")},
     "magnetisation": {"si": ("kind", "remanence", "saturation", "angle_deg", "profile_deg",
                              "strength_profile"),
                       "nondimensional": ("kind", "angle_deg", "profile_deg", "strength_profile")},
@@ -94,7 +97,7 @@ FIELD_KEYS = {
                                   "radius", "angle_deg", "rail", "along", "coefficients", "t",
                                   "moment_along_path")},
 }
-TOP = ("units", "geometry", "rod", "magnetisation", "field", "gravity")
+TOP = ("units", "geometry", "rod", "ends", "magnetisation", "field", "gravity")
 
 #: Plausible SI magnitudes: a value outside is a unit slip (a 30 T field, a 3 km rod).
 @dataclasses.dataclass(frozen=True)
@@ -109,6 +112,8 @@ class FileScene:
     length: float
     data: dict
     margins: dict = dataclasses.field(default_factory=dict)
+    twisted: object = None  # a rod held at both ends: its TwistedRod (``scene`` is None)
+    turns: float = 0.0  # and its far end's turns (ends.rotation_turns)
 
     def input_of(self, key: str, what: str = "vary") -> tuple[str, float]:
         """(scene key, factor) of the file key ``key``; ParameterError (naming the option
@@ -122,7 +127,19 @@ class FileScene:
 
     def value(self, key: str) -> float:
         scene_key, factor = self.input_of(key)
+        if self.twisted is not None:
+            return self.twisted_value(scene_key) / factor
         return float(np.asarray(self.scene.value(scene_key))) / factor
+
+    def twisted_value(self, key: str) -> float:
+        """A held rod's input by its rod key ("turns", "tension", "field0.load", ...)."""
+        if key == "turns":
+            return self.turns
+        if "." not in key:
+            return float(getattr(self.twisted, key))
+        name, field, *index = key.split(".")
+        v = np.asarray(getattr(self.twisted.loads[name], field))
+        return float(v[int(index[0])] if index else v)
 
 
 def _toml():
@@ -203,7 +220,7 @@ def scene_from(data: dict) -> FileScene:
     if geometry not in ("planar", "3d"):
         fail("geometry", f"must be \"planar\" or \"3d\", got {geometry!r}")
     tables = {}
-    for name in ("rod", "magnetisation", "gravity"):
+    for name in ("rod", "ends", "magnetisation", "gravity"):
         table = data.get(name, {})
         if not isinstance(table, dict):
             fail(name, "must be a table")
@@ -229,8 +246,19 @@ def scene_from(data: dict) -> FileScene:
             check_plausible(field, f"field.{i}.")
     rod = tables["rod"]
     support = rod.get("support", "clamped")
-    if support not in ("clamped", "pinned"):
-        fail("rod.support", f"must be \"clamped\" or \"pinned\", got {support!r}")
+    if support not in ("clamped", "pinned", "clamped-clamped"):
+        fail("rod.support", f"must be \"clamped\", \"pinned\" or \"clamped-clamped\", got "
+                            f"{support!r}")
+    held = support == "clamped-clamped"
+    if held and geometry != "3d":
+        fail("rod.support", "\"clamped-clamped\" (both ends held, the far end turned) needs "
+                            "geometry = \"3d\"")
+    for table, keys in (("rod", ("twist_ratio", "bending_ratio")),
+                        ("ends", tuple(tables["ends"]))):
+        for key in keys:
+            if key in tables[table] and not held:
+                fail(f"{table}.{key}", "belongs to a rod held at both ends (support = "
+                                       "\"clamped-clamped\")")
     inputs: dict[str, tuple[str, float]] = {}
     margins: dict[str, float] = {}
     taper = coefficients(rod, "stiffness_profile", "rod.", chebyshev_form("E I(s) / E I"))
@@ -275,8 +303,8 @@ def scene_from(data: dict) -> FileScene:
     if si and fields:
         m_key = "remanence" if kind == "hard" else "saturation"
         magnetisation = number(mag, m_key, "magnetisation.")
-    profile = angle_profile(mag, kind, geometry)
-    strength = strength_profile(mag, kind, geometry, fields)
+    profile = angle_profile(mag, kind, "framed" if held else geometry)
+    strength = strength_profile(mag, kind, "framed" if held else geometry, fields)
     for i, field in enumerate(fields):
         where = f"field.{i}."
         fkind = field["kind"]
@@ -381,8 +409,55 @@ def scene_from(data: dict) -> FileScene:
             continue
         terms[name] = PointDipole(M, c, np.array([u[0], 0.0, u[1]]), rail, along)
         inputs[f"{where}along"] = (f"{name}.along", 1.0 / L)
+    if held:
+        return _held(terms, inputs, L, data, margins, tables, bending if si else 1.0)
     scene = Scene(terms, geometry=geometry, support=support)
     return FileScene(scene, inputs, L, data, margins)
+
+
+def _held(terms, inputs, L, data, margins, tables, bending) -> FileScene:
+    """The file of a rod held at both ends: a ``TwistedRod`` (``jaxrod.twisted``) under the
+    file's loads, ``[ends]`` its turns and its tension (N, or T L^2 / B) or shortening."""
+    from jaxrod.twisted.rod import DEFAULT_TWIST_RATIO, TwistedRod
+
+    rod, ends = tables["rod"], tables["ends"]
+    if isinstance(terms["bending"], TaperedBending):
+        fail("rod.stiffness_profile", "a rod held at both ends is uniform (no taper yet)")
+    for key in ("twist_ratio", "bending_ratio"):
+        if key in rod and not number(rod, key, "rod.") > 0:
+            fail(f"rod.{key}", f"must be > 0, got {rod[key]!r}")
+    if ("tension" in ends) == ("shortening" in ends):
+        fail("ends", "give tension (a dead load pulling the far end) or shortening (the far "
+                     "end held at (1 - shortening) L), one of them")
+    per_n = L**2 / bending
+    if "tension" in ends:
+        control = {"tension": per_n * number(ends, "tension", "ends.")}
+        inputs["ends.tension"] = ("tension", per_n)
+    else:
+        e = number(ends, "shortening", "ends.")
+        if not 0.0 < e < 1.0:
+            fail("ends.shortening", f"must be in (0, 1) (a fraction of the length), got {e!r}")
+        control = {"shortening": e}
+        inputs["ends.shortening"] = ("shortening", 1.0)
+    turns = number(ends, "rotation_turns", "ends.", required=False, default=0.0)
+    inputs["ends.rotation_turns"] = ("turns", 1.0)
+    loads = {name: t for name, t in terms.items() if name != "bending"}
+    for name, t in loads.items():
+        if t.distributed is not None:
+            fail(f"field.{name[5:]}" if name.startswith("field") else name,
+                 "a rod held at both ends takes uniform fields, gravity and magnets acting on "
+                 "its far end (not a programmed remanence in a magnet's field)")
+    try:
+        twisted = TwistedRod(number(rod, "twist_ratio", "rod.", required=False,
+                                    default=DEFAULT_TWIST_RATIO),
+                             number(rod, "bending_ratio", "rod.", required=False, default=1.0),
+                             n=16, loads=loads, **control)
+    except ParameterError as err:
+        raise ParameterError(f"rod.{err}" if str(err).startswith(("twist", "bending"))
+                             else str(err)) from None
+    for key in ("twist_ratio", "bending_ratio"):
+        inputs[f"rod.{key}"] = (key, 1.0)
+    return FileScene(None, inputs, L, data, margins, twisted, turns)
 
 
 def _curve_dipole(field: dict, where: str, M, L, half):
@@ -421,10 +496,16 @@ def presets() -> list[str]:
     return sorted(p.stem for p in RIGS.glob("*.toml"))
 
 
-def load(path: str | Path, settings: list[str] = ()) -> FileScene:
+def load(path: str | Path, settings: list[str] = (), held: bool = False) -> FileScene:
     """The scene of the file at ``path`` (or of the shipped rig of that name, ``presets``),
-    with ``KEY=VALUE`` overrides (``apply_settings``)."""
+    with ``KEY=VALUE`` overrides (``apply_settings``). A rod held at both ends (support =
+    "clamped-clamped") only where ``held`` (the commands that take it say so)."""
     path = Path(path)
     if not path.exists() and str(path) in presets():
         path = RIGS / f"{path}.toml"
-    return scene_from(apply_settings(read(path), list(settings)))
+    file = scene_from(apply_settings(read(path), list(settings)))
+    if file.twisted is not None and not held:
+        raise ParameterError("rod.support: a rod held at both ends (\"clamped-clamped\") is "
+                             "taken by jaxrod equilibrium and jaxrod branch; this command "
+                             "takes rods with a free end")
+    return file

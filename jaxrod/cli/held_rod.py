@@ -1,0 +1,166 @@
+"""``jaxrod equilibrium RIG`` and ``jaxrod branch RIG --vary KEY`` for a rod held at both
+ends (support = "clamped-clamped", ``jaxrod.twisted``): the far end's twisting moment
+``twist_moment`` (M L / B) and ``tension`` (T L^2 / B, the clamp's pull), the twist and
+writhe, the count of unstable directions; along a branch its folds and ``branch_points``
+(their ``value`` in the varied key's unit: turns for ``ends.rotation_turns``)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+
+from jaxrod.params import ParameterError
+from jaxrod.status import Status
+
+#: The path's degree where --n is not given: a localised helix of tens of turns needs it
+#: (at 16 the path to PyElastica's case ends on another, unstable, state).
+PATH_DEGREE = 48
+#: The most the degree is raised to (doubling) until the state's Chebyshev tail is <= 1e-8.
+MOST_DEGREE = 384
+
+
+def _rod(file, n: int):
+    return dataclasses.replace(file.twisted, n=n)
+
+
+def _resolved(file, n: int, turns: float | None = None):
+    """The file's equilibrium (``twisted_equilibrium``) at the degree n, then at the next
+    degrees of ``DEGREES`` from it until resolved."""
+    from jaxrod.twisted.branch import twisted_equilibrium
+
+    turns = file.turns if turns is None else turns
+    state = twisted_equilibrium(_rod(file, n), turns)
+    while state.converged and state.status == Status.UNDER_RESOLVED and 2 * n <= MOST_DEGREE:
+        n *= 2
+        state = twisted_equilibrium(_rod(file, n), turns, start=state)
+    return state
+
+
+def _degree(args) -> int:
+    return PATH_DEGREE if getattr(args, "n_default", True) else args.n
+
+
+def _fields(state, file) -> dict:
+    """A state's report, the file's length unit for the far end's position."""
+    s, r = state.centreline()
+    out = state.as_dict()
+    out.update(tip_angle_deg=0.0, tip_tangent_deg=0.0,
+               tip_position=[float(v) * file.length for v in r[-1]],
+               stable=state.unstable == 0, residual_norm=state.residual,
+               error_estimate=state.tail, message=state.status.message)
+    return out
+
+
+def equilibrium_of_held(args, file) -> int:
+    state = _resolved(file, _degree(args))
+    out = {"rig": args.rig, "set": args.set, **_fields(state, file)}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"{args.rig}: {state.turns:.10g} turns, twisting moment M L/B = "
+              f"{state.twist_moment:.10g}, tension T L^2/B = {state.tension:.10g}; Tw "
+              f"{state.twist:.6g}, Wr {state.writhe:.6g}; "
+              f"{'stable' if state.unstable == 0 else f'{state.unstable} unstable'}; "
+              f"{out['message']} (n = {state.rod.n}, Chebyshev tail {state.tail:.1e})")
+    return 0 if state.status == Status.SUCCESS else 1
+
+
+def _rod_key(file, key: str) -> str:
+    rod_key, factor = file.input_of(key)
+    if factor != 1.0 and rod_key not in ("tension",) and "." not in rod_key:
+        raise ParameterError(f"vary: {key!r} cannot be varied on a rod held at both ends")
+    return rod_key
+
+
+def branch_of_held(args, file, start: float, stop: float) -> int:
+    """The branch along ``args.vary`` from ``start`` to ``stop`` (the file's units), from the
+    file's equilibrium at ``start``."""
+    from jaxrod.twisted.branch import twist_branch
+
+    key = _rod_key(file, args.vary)
+    factor = file.input_of(args.vary)[1]
+    n = _degree(args)
+    if key == "turns":
+        first = _resolved(file, n, turns=start)
+    else:
+        first = _resolved(dataclasses.replace(
+            file, twisted=file.twisted.replace(key, start * factor)), n)
+    rod = first.rod
+    branch = twist_branch(rod, stop * factor, vary=key, start=first)
+    values = branch.column("value") / factor
+    tails = branch.column("tail")
+    ok = all(p.converged for p in branch.points) and all(
+        p.converged for p in branch.branch_points)
+    status = (Status(branch.status) if not branch.complete and branch.status in
+              {s.value for s in Status} else Status.NOT_CONVERGED if not ok or not
+              branch.complete else Status.UNDER_RESOLVED if np.max(tails) > 1e-8
+              else Status.SUCCESS)
+
+    def point(state):
+        return {"value": state.value / factor, **_fields(state, file)}
+
+    out = {"vary": args.vary, "points": len(values), "value": values.tolist(),
+           "twist_moment": branch.column("twist_moment").tolist(),
+           "tension": branch.column("tension").tolist(),
+           "unstable": branch.column("unstable").tolist(),
+           "stable": [bool(u == 0) for u in branch.column("unstable")],
+           "folds": [point(branch.points[i]) for i in branch.folds],
+           "branch_points": [{**point(p.state), "unstable": list(p.unstable),
+                              "kernel_dimension": abs(p.unstable[1] - p.unstable[0]),
+                              "converged": p.converged} for p in branch.branch_points],
+           "converged": status == Status.SUCCESS, "status": status.name.lower(),
+           "message": branch.message if not branch.complete else status.message,
+           "complete": branch.complete, "last_value": float(values[-1]), "n": rod.n,
+           "error_estimate": float(np.max(tails))}
+    if getattr(args, "out", None):
+        from jaxrod.cli._output import _output_dir
+
+        out_dir = _output_dir(args.out)
+        (out_dir / "branch.json").write_text(json.dumps(out, indent=1))
+        rows = np.column_stack([values, out["twist_moment"], out["tension"],
+                                out["unstable"]])
+        np.savetxt(out_dir / "branch.csv", rows, delimiter=",", comments="",
+                   header=f"{args.vary},twist_moment,tension,unstable")
+        _figure(out_dir / "branch.png", values, out, args.vary)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"{args.rig}: {len(values)} points along {args.vary} from {start:g} to "
+              f"{stop:g}; {len(out['folds'])} folds, {len(out['branch_points'])} branch "
+              f"points (n = {rod.n})")
+        for kind, items in (("fold", out["folds"]), ("branch point", out["branch_points"])):
+            for f in items:
+                print(f"  {kind} at {args.vary} = {f['value']:.10g} (twisting moment "
+                      f"{f['twist_moment']:.10g}, tension {f['tension']:.10g})"
+                      + ("" if f["converged"] else "  NOT CONVERGED"))
+        if not out["converged"]:
+            print(f"  {out['status']} (the branch ended at {args.vary} = "
+                  f"{out['last_value']:.10g}): {out['message']}")
+    return 0 if out["converged"] else 1
+
+
+def _figure(path, values, out, vary) -> None:
+    """The twisting moment against the varied input: stable solid, unstable dashed, folds
+    (x) and branch points (o)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    m, stable = np.array(out["twist_moment"]), np.array(out["stable"])
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    for mask, style, colour, label in ((stable, "-", "C0", "stable"),
+                                       (~stable, "--", "C3", "unstable")):
+        ax.plot(values, np.where(mask, m, np.nan), style, color=colour, label=label)
+    for key, marker, label in (("folds", "kx", "fold"), ("branch_points", "ko",
+                                                          "branch point")):
+        if out[key]:
+            ax.plot([p["value"] for p in out[key]], [p["twist_moment"] for p in out[key]],
+                    marker, mfc="none", label=label)
+    ax.set_xlabel(vary)
+    ax.set_ylabel("twisting moment M L / B")
+    ax.legend(fontsize=8)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
