@@ -149,7 +149,9 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "twist_branch": ("jaxrod.twisted.branch", "twist_branch"),
         "twisted_equilibrium": ("jaxrod.twisted.branch", "twisted_equilibrium"),
         "TwistBranch": ("jaxrod.twisted.branch", "TwistBranch"),
-        "TwistState": ("jaxrod.twisted.branch", "TwistState"),
+        "TwistState": ("jaxrod.twisted.state", "TwistState"),
+        "TwistBranchPoint": ("jaxrod.twisted.branch_points", "TwistBranchPoint"),
+        "switch_branch": ("jaxrod.twisted.branch", "switch_branch"),
     },
     "Fold curves, the cusp and design maps": {
         "fold_curves": ("jaxrod.bistability.fold_curves", "fold_curves"),

@@ -152,16 +152,16 @@ def test_the_assembled_linearisation_is_the_lagrangians_derivatives():
     constraints, the phase condition on and pinned, a path through the turns and a field's
     strength together) at a random point of an anisotropic rod, to round-off (1e-11
     against entries of ~100)."""
-    from jaxrod.twisted import branch
+    from jaxrod.twisted import equations
 
     rod = _loaded_rod(twist_ratio=0.6, bending_ratio=1.3, shortening=0.1, n=8)
     disc, k, keys = rod.discretisation(), rod.constraints, ("turns", "field.load")
     w = np.random.default_rng(1).normal(size=disc.size + k + 2) * 0.3
-    x_ref, c, _ = branch._phase(jnp.asarray(w[:disc.size] + 0.1), disc, True)
-    data, m = branch._Path(keys, (0.0, 0.0), (1.0, 2.5)).data(rod, 0.3, disc), \
+    x_ref, c, _ = equations._phase(jnp.asarray(w[:disc.size] + 0.1), disc, True)
+    data, m = equations._Path(keys, (0.0, 0.0), (1.0, 2.5)).data(rod, 0.3, disc), \
         disc.size + k + 1
-    grad = jax.grad(branch._lagrangian)
-    assembled = jax.jit(branch._linearise, static_argnums=(3, 4))
+    grad = jax.grad(equations._lagrangian)
+    assembled = jax.jit(equations._linearise, static_argnums=(3, 4))
     reference = jax.jit(lambda *a: (grad(*a), jax.jacfwd(grad)(*a)), static_argnums=(3, 4))
     for on in (1.0, 0.0):
         aux = (x_ref, c * on, jnp.asarray(on))

@@ -21,20 +21,25 @@ PATH_DEGREE = 48
 MOST_DEGREE = 384
 
 
-def _rod(file, n: int):
-    return dataclasses.replace(file.twisted, n=n)
+def twisted_rod(file, n: int):
+    """The ``TwistedRod`` of a file's rod held at both ends, at degree n."""
+    from jaxrod.twisted.rod import DEFAULT_TWIST_RATIO, TwistedRod
+
+    h = file.held
+    return TwistedRod(DEFAULT_TWIST_RATIO if h.twist_ratio is None else h.twist_ratio,
+                      h.bending_ratio, h.tension, h.shortening, n, h.loads)
 
 
-def _resolved(file, n: int, turns: float | None = None):
-    """The file's equilibrium (``twisted_equilibrium``) at the degree n, then at the next
-    degrees of ``DEGREES`` from it until resolved."""
+def _resolved(rod, turns: float):
+    """The rod's equilibrium at ``turns`` (``twisted_equilibrium``) at its degree, then at
+    twice the degree from it, and so on, until resolved."""
     from jaxrod.twisted.branch import twisted_equilibrium
 
-    turns = file.turns if turns is None else turns
-    state = twisted_equilibrium(_rod(file, n), turns)
+    state = twisted_equilibrium(rod, turns)
+    n = rod.n
     while state.converged and state.status == Status.UNDER_RESOLVED and 2 * n <= MOST_DEGREE:
         n *= 2
-        state = twisted_equilibrium(_rod(file, n), turns, start=state)
+        state = twisted_equilibrium(dataclasses.replace(rod, n=n), turns, start=state)
     return state
 
 
@@ -54,7 +59,7 @@ def _fields(state, file) -> dict:
 
 
 def equilibrium_of_held(args, file) -> int:
-    state = _resolved(file, _degree(args))
+    state = _resolved(twisted_rod(file, _degree(args)), file.held.turns)
     out = {"rig": args.rig, "set": args.set, **_fields(state, file)}
     if args.json:
         print(json.dumps(out))
@@ -81,12 +86,11 @@ def branch_of_held(args, file, start: float, stop: float) -> int:
 
     key = _rod_key(file, args.vary)
     factor = file.input_of(args.vary)[1]
-    n = _degree(args)
+    rod = twisted_rod(file, _degree(args))
     if key == "turns":
-        first = _resolved(file, n, turns=start)
+        first = _resolved(rod, start)
     else:
-        first = _resolved(dataclasses.replace(
-            file, twisted=file.twisted.replace(key, start * factor)), n)
+        first = _resolved(rod.replace(key, start * factor), file.held.turns)
     rod = first.rod
     branch = twist_branch(rod, stop * factor, vary=key, start=first)
     values = branch.column("value") / factor

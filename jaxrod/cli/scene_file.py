@@ -83,7 +83,7 @@ def cmd_equilibrium(args) -> int:
     from jaxrod.equilibria.resolution import resolved_equilibrium
 
     file = _load(args, held=True)
-    if file.twisted is not None:
+    if file.held is not None:
         from jaxrod.cli.held_rod import equilibrium_of_held
 
         return equilibrium_of_held(args, file)
@@ -118,7 +118,7 @@ def branch_on_file(args) -> int:
                                  f"{resolvable(args.n)} modes (raise --n for more), got "
                                  f"{args.modes}")
     file = _load(args, held=True)
-    if file.twisted is not None:
+    if file.held is not None:
         from jaxrod.cli.held_rod import branch_of_held
 
         if args.vary is None or args.start is None or args.stop is None:

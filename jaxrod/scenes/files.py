@@ -60,6 +60,7 @@ from jaxrod.scenes.file_entries import (
     unknown_key,
     vector,
 )
+from jaxrod.scenes.held import HeldEnds, held_ends
 from jaxrod.scenes.scene import Scene
 from jaxrod.scenes.terms import (
     Anisotropy,
@@ -112,8 +113,7 @@ class FileScene:
     length: float
     data: dict
     margins: dict = dataclasses.field(default_factory=dict)
-    twisted: object = None  # a rod held at both ends: its TwistedRod (``scene`` is None)
-    turns: float = 0.0  # and its far end's turns (ends.rotation_turns)
+    held: HeldEnds | None = None  # a rod held at both ends (``scene`` is None)
 
     def input_of(self, key: str, what: str = "vary") -> tuple[str, float]:
         """(scene key, factor) of the file key ``key``; ParameterError (naming the option
@@ -127,19 +127,9 @@ class FileScene:
 
     def value(self, key: str) -> float:
         scene_key, factor = self.input_of(key)
-        if self.twisted is not None:
-            return self.twisted_value(scene_key) / factor
+        if self.held is not None:
+            return self.held.value(scene_key) / factor
         return float(np.asarray(self.scene.value(scene_key))) / factor
-
-    def twisted_value(self, key: str) -> float:
-        """A held rod's input by its rod key ("turns", "tension", "field0.load", ...)."""
-        if key == "turns":
-            return self.turns
-        if "." not in key:
-            return float(getattr(self.twisted, key))
-        name, field, *index = key.split(".")
-        v = np.asarray(getattr(self.twisted.loads[name], field))
-        return float(v[int(index[0])] if index else v)
 
 
 def _toml():
@@ -410,54 +400,10 @@ def scene_from(data: dict) -> FileScene:
         terms[name] = PointDipole(M, c, np.array([u[0], 0.0, u[1]]), rail, along)
         inputs[f"{where}along"] = (f"{name}.along", 1.0 / L)
     if held:
-        return _held(terms, inputs, L, data, margins, tables, bending if si else 1.0)
+        ends = held_ends(terms, inputs, tables, L**2 / bending if si else 1.0)
+        return FileScene(None, inputs, L, data, margins, ends)
     scene = Scene(terms, geometry=geometry, support=support)
     return FileScene(scene, inputs, L, data, margins)
-
-
-def _held(terms, inputs, L, data, margins, tables, bending) -> FileScene:
-    """The file of a rod held at both ends: a ``TwistedRod`` (``jaxrod.twisted``) under the
-    file's loads, ``[ends]`` its turns and its tension (N, or T L^2 / B) or shortening."""
-    from jaxrod.twisted.rod import DEFAULT_TWIST_RATIO, TwistedRod
-
-    rod, ends = tables["rod"], tables["ends"]
-    if isinstance(terms["bending"], TaperedBending):
-        fail("rod.stiffness_profile", "a rod held at both ends is uniform (no taper yet)")
-    for key in ("twist_ratio", "bending_ratio"):
-        if key in rod and not number(rod, key, "rod.") > 0:
-            fail(f"rod.{key}", f"must be > 0, got {rod[key]!r}")
-    if ("tension" in ends) == ("shortening" in ends):
-        fail("ends", "give tension (a dead load pulling the far end) or shortening (the far "
-                     "end held at (1 - shortening) L), one of them")
-    per_n = L**2 / bending
-    if "tension" in ends:
-        control = {"tension": per_n * number(ends, "tension", "ends.")}
-        inputs["ends.tension"] = ("tension", per_n)
-    else:
-        e = number(ends, "shortening", "ends.")
-        if not 0.0 < e < 1.0:
-            fail("ends.shortening", f"must be in (0, 1) (a fraction of the length), got {e!r}")
-        control = {"shortening": e}
-        inputs["ends.shortening"] = ("shortening", 1.0)
-    turns = number(ends, "rotation_turns", "ends.", required=False, default=0.0)
-    inputs["ends.rotation_turns"] = ("turns", 1.0)
-    loads = {name: t for name, t in terms.items() if name != "bending"}
-    for name, t in loads.items():
-        if t.distributed is not None:
-            fail(f"field.{name[5:]}" if name.startswith("field") else name,
-                 "a rod held at both ends takes uniform fields, gravity and magnets acting on "
-                 "its far end (not a programmed remanence in a magnet's field)")
-    try:
-        twisted = TwistedRod(number(rod, "twist_ratio", "rod.", required=False,
-                                    default=DEFAULT_TWIST_RATIO),
-                             number(rod, "bending_ratio", "rod.", required=False, default=1.0),
-                             n=16, loads=loads, **control)
-    except ParameterError as err:
-        raise ParameterError(f"rod.{err}" if str(err).startswith(("twist", "bending"))
-                             else str(err)) from None
-    for key in ("twist_ratio", "bending_ratio"):
-        inputs[f"rod.{key}"] = (key, 1.0)
-    return FileScene(None, inputs, L, data, margins, twisted, turns)
 
 
 def _curve_dipole(field: dict, where: str, M, L, half):
@@ -504,7 +450,7 @@ def load(path: str | Path, settings: list[str] = (), held: bool = False) -> File
     if not path.exists() and str(path) in presets():
         path = RIGS / f"{path}.toml"
     file = scene_from(apply_settings(read(path), list(settings)))
-    if file.twisted is not None and not held:
+    if file.held is not None and not held:
         raise ParameterError("rod.support: a rod held at both ends (\"clamped-clamped\") is "
                              "taken by jaxrod equilibrium and jaxrod branch; this command "
                              "takes rods with a free end")

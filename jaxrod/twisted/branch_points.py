@@ -1,0 +1,87 @@
+"""Branch points of a twisted rod's branch: where its count of unstable directions changes
+without a fold, refined to the crossing of the bordered Hessian's eigenvalue."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod.twisted.equations import _Path, _solve_program
+from jaxrod.twisted.rod import TwistedRod
+from jaxrod.twisted.state import TwistState, _states
+
+
+@dataclasses.dataclass(frozen=True)
+class TwistBranchPoint:
+    """Where a branch's count of unstable directions changes without a fold: ``state``
+    (refined: the point where the bordered Hessian's eigenvalue crosses zero), ``unstable``
+    (the count before and after; a jump of 2 at a straight rod: the rotational symmetry's
+    two-dimensional kernel), ``converged`` (the refinement's report), ``kernel`` (the
+    x part of the crossing eigenvector, for ``switch_branch``)."""
+
+    state: TwistState
+    unstable: tuple[int, int]
+    converged: bool
+    kernel: np.ndarray
+    path: _Path
+
+    @property
+    def value(self) -> float:
+        return self.state.value
+
+    def as_dict(self) -> dict:
+        return {"value": self.value, **self.state.as_dict(), "unstable": list(self.unstable),
+                "kernel_dimension": abs(self.unstable[1] - self.unstable[0]),
+                "converged": self.converged}
+
+
+def _refine(rod: TwistedRod, path: _Path, data, a: TwistState, b: TwistState
+            ) -> TwistBranchPoint:
+    """The branch point between the neighbours a and b: the path parameter where the
+    bordered Hessian's eigenvalue number q (q = a's negative count, a the side with fewer)
+    crosses zero, by the Illinois variant of false position on Newton's states at fixed
+    lam (from the chord between a and b)."""
+    disc = data[0]
+    lo, hi = (a, b) if a.unstable < b.unstable else (b, a)
+    bordering = rod.constraints + int(rod.symmetric and np.linalg.norm(
+        lo.w[:2 * disc.free]) > 1e-10)
+    q = lo.unstable + bordering
+
+    def at(lam):
+        f = (lam - a.w[-1]) / (b.w[-1] - a.w[-1])
+        w = (1 - f) * a.w + f * b.w
+        w[-1] = lam
+        res, eig, vec, _ = _solve_program(disc.size, rod.constraints, path.keys,
+                                          rod.symmetric, data, jnp.asarray(w))
+        return res, float(eig[q]), np.asarray(vec[:, q]), lam
+
+    (_, ga, _, la), (_, gb, _, lb) = at(lo.w[-1]), at(hi.w[-1])
+    best = None
+    side = 0
+    for _ in range(60):
+        lam = (la * gb - lb * ga) / (gb - ga)
+        res, g, vec, _ = at(lam)
+        best = (res, g, vec, lam)
+        if abs(g) <= 1e-12 or abs(lb - la) <= 1e-13 * max(1.0, abs(lam)):
+            break
+        if g * ga > 0:
+            la, ga = lam, g
+            gb = gb * 0.5 if side == -1 else gb
+            side = -1
+        else:
+            lb, gb = lam, g
+            ga = ga * 0.5 if side == 1 else ga
+            side = 1
+    res, g, vec, lam = best
+    eig_count = np.sum(np.asarray(_solve_program(
+        disc.size, rod.constraints, path.keys, rod.symmetric, data,
+        jnp.asarray(np.append(np.asarray(res.x), lam)))[1]) < 0)
+    state = _states(rod, path, data, np.append(np.asarray(res.x), lam)[None], [res.converged],
+                    [res.residual_norm], [res.iterations], [eig_count])[0]
+    converged = bool(res.converged) and abs(g) <= 1e-8
+    return TwistBranchPoint(state, (a.unstable, b.unstable), converged, vec[:disc.size],
+                            path)
+
+

@@ -1,0 +1,116 @@
+"""One equilibrium of a twisted rod and its report: the end reactions, twist and writhe, the
+count of unstable directions, Newton's report and the resolution."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxrod import spectral
+from jaxrod.discretise.framed import twist_and_writhe
+from jaxrod.equilibria.resolution import TOLERANCE
+from jaxrod.programs import jit
+from jaxrod.status import Status
+from jaxrod.twisted.equations import _apply, _Path
+from jaxrod.twisted.rod import MULTIPLIER_UNIT, TwistedRod, energy
+
+
+@dataclasses.dataclass(frozen=True)
+class TwistState:
+    """One equilibrium of a twisted rod (``twisted_equilibrium`` or a branch's point).
+
+    turns: the far end's rotation; twist_moment: M L / B1 about the axis at the far end;
+    tension: T L^2 / B1 there; twist, writhe: Tw and Wr (their sum is ``turns``, the
+    linking number); unstable: how many directions lower the energy (0: stable);
+    converged, residual, iterations: Newton's report; tail: the largest of the three
+    fields' last two Chebyshev coefficients (the resolution: small against the fields)."""
+
+    rod: TwistedRod
+    w: np.ndarray
+    turns: float
+    twist_moment: float
+    tension: float
+    twist: float
+    writhe: float
+    unstable: int
+    converged: bool
+    residual: float
+    iterations: int
+    tail: float
+    value: float = float("nan")
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.w[:3 * (self.rod.n - 1)]
+
+    @property
+    def status(self) -> Status:
+        """NOT_CONVERGED, UNDER_RESOLVED (converged, but the fields' Chebyshev tail is above
+        ``jaxrod.equilibria.resolution.TOLERANCE``: raise n, e.g. by ``twisted_equilibrium``
+        with this state as its start; its stability count may be spurious) or SUCCESS."""
+        if not self.converged:
+            return Status.NOT_CONVERGED
+        return Status.UNDER_RESOLVED if self.tail > TOLERANCE else Status.SUCCESS
+
+    def centreline(self) -> tuple[np.ndarray, np.ndarray]:
+        """(s, r): the Chebyshev nodes and the centreline r(s) = int_0^s d3 there, (n + 1, 3)."""
+        from jaxrod.twisted.rod import centreline
+
+        disc = self.rod.discretisation()
+        return np.asarray(disc.field.nodes), centreline(disc, self.x)
+
+    def as_dict(self) -> dict:
+        return {"turns": self.turns, "twist_moment": self.twist_moment,
+                "tension": self.tension, "twist": self.twist, "writhe": self.writhe,
+                "unstable": self.unstable, "converged": self.converged,
+                "residual": self.residual, "iterations": self.iterations,
+                "chebyshev_tail": self.tail, "n": self.rod.n,
+                "status": self.status.name.lower()}
+
+
+def _twist_measures(x, lam, keys: tuple, data):
+    """(twist moment, Tw, Wr, turns, tension under tension control) of one state."""
+    turns, inputs, loads = _apply(keys, data, lam)
+    disc = data[0]
+    moment = jax.grad(energy, argnums=1)(x, turns, disc, inputs, loads) / (2.0 * math.pi)
+    return (moment, *twist_and_writhe(disc, x, turns), turns, inputs[2])
+
+
+_measures_program = jit(jax.vmap(_twist_measures, in_axes=(0, 0, None, None)),
+                        static_argnums=(2,))
+
+
+def _states(rod: TwistedRod, path: _Path, data, W, converged, residual, iterations,
+            index) -> list[TwistState]:
+    """The records of the states W (one per row: x, mu, nu, lam) with Newton's report and
+    the bordered Hessian's negative count ``index`` (less the bordering rows' k + 1 or k:
+    the phase multiplier's row counts where the orbit is a circle)."""
+    W = np.atleast_2d(np.asarray(W))
+    disc = data[0]
+    size = disc.size
+    moment, tw, wr, turns, pull = (np.asarray(a) for a in _measures_program(
+        jnp.asarray(W[:, :size]), jnp.asarray(W[:, -1]), path.keys, data))
+    tension = pull if rod.constraints == 2 else -MULTIPLIER_UNIT * W[:, size + 2]
+    fields = np.asarray(disc.field.to_full) @ W[:, :size].reshape(len(W), 3, disc.free) \
+        .transpose(0, 2, 1)
+    tail = np.abs(np.einsum("kj,pjf->pkf", spectral.values_to_coefficients_matrix(rod.n),
+                            fields)[:, -2:]).max(axis=(1, 2))
+    orbit = np.linalg.norm(np.concatenate([W[:, :disc.free], W[:, disc.free:2 * disc.free]],
+                                          axis=1), axis=1) > 1e-10
+    bordering = rod.constraints + (orbit & rod.symmetric)
+    states = []
+    for i in range(len(W)):
+        lam = float(W[i, -1])
+        _, at = path.rod_at(rod, lam) if np.isfinite(lam) else (None, rod)
+        states.append(TwistState(
+            at, W[i], float(turns[i]), float(moment[i]), float(tension[i]), float(tw[i]),
+            float(wr[i]), int(index[i]) - int(bordering[i]), bool(converged[i]),
+            float(residual[i]), int(iterations[i]), float(tail[i]),
+            path.origin[0] + path.span[0] * lam))
+    return states
+
+
