@@ -53,10 +53,10 @@ def uses_scene_file(args, vary_is_file_key: bool = True) -> bool:
     return False
 
 
-def _load(args, held: bool = False):
+def _load(args, framed: bool = False):
     from jaxrod.scenes.files import load
 
-    return load(args.rig, args.set, held=held)
+    return load(args.rig, args.set, framed=framed)
 
 
 def _range(args, file):
@@ -82,11 +82,11 @@ def cmd_equilibrium(args) -> int:
         raise ParameterError("rig: name a scene file (jaxrod equilibrium RIG.toml)")
     from jaxrod.equilibria.resolution import resolved_equilibrium
 
-    file = _load(args, held=True)
-    if file.held is not None:
-        from jaxrod.cli.held_rod import equilibrium_of_held
+    file = _load(args, framed=True)
+    if file.framed is not None:
+        from jaxrod.cli.framed_rod import framed_equilibrium
 
-        return equilibrium_of_held(args, file)
+        return framed_equilibrium(args, file)
     r = resolved_equilibrium(file.scene, n=args.n)
     eq = r.equilibrium
     out = {"rig": args.rig, "set": args.set, **_at(eq.tip_angle_deg, eq.tip_position, file),
@@ -117,16 +117,16 @@ def branch_on_file(args) -> int:
             raise ParameterError(f"modes: degree {args.n} resolves the lowest 0 to "
                                  f"{resolvable(args.n)} modes (raise --n for more), got "
                                  f"{args.modes}")
-    file = _load(args, held=True)
-    if file.held is not None:
-        from jaxrod.cli.held_rod import branch_of_held
+    file = _load(args, framed=True)
+    if file.framed is not None:
+        from jaxrod.cli.framed_rod import framed_branch
 
         if args.vary is None or args.start is None or args.stop is None:
             raise ParameterError("vary: give --vary KEY --from A --to B with a scene file")
         file.input_of(args.vary)
         if args.start == args.stop:
             raise ParameterError(f"to: must differ from --from ({args.start:g})")
-        return branch_of_held(args, file, args.start, args.stop)
+        return framed_branch(args, file, args.start, args.stop)
     key, start, stop, factor = _range(args, file)
     from jaxrod.equilibria.resolution import resolved_branch
 

@@ -60,7 +60,7 @@ from jaxrod.scenes.file_entries import (
     unknown_key,
     vector,
 )
-from jaxrod.scenes.held import HeldEnds, held_ends
+from jaxrod.scenes.framed import FramedSpec, framed_spec
 from jaxrod.scenes.scene import Scene
 from jaxrod.scenes.terms import (
     Anisotropy,
@@ -113,7 +113,7 @@ class FileScene:
     length: float
     data: dict
     margins: dict = dataclasses.field(default_factory=dict)
-    held: HeldEnds | None = None  # a rod held at both ends (``scene`` is None)
+    framed: FramedSpec | None = None  # a rod that carries its frame (``scene`` is None)
 
     def input_of(self, key: str, what: str = "vary") -> tuple[str, float]:
         """(scene key, factor) of the file key ``key``; ParameterError (naming the option
@@ -127,8 +127,8 @@ class FileScene:
 
     def value(self, key: str) -> float:
         scene_key, factor = self.input_of(key)
-        if self.held is not None:
-            return self.held.value(scene_key) / factor
+        if self.framed is not None:
+            return self.framed.value(scene_key) / factor
         return float(np.asarray(self.scene.value(scene_key))) / factor
 
 
@@ -243,12 +243,19 @@ def scene_from(data: dict) -> FileScene:
     if held and geometry != "3d":
         fail("rod.support", "\"clamped-clamped\" (both ends held, the far end turned) needs "
                             "geometry = \"3d\"")
-    for table, keys in (("rod", ("twist_ratio", "bending_ratio")),
-                        ("ends", tuple(tables["ends"]))):
+    # a rod that carries its frame: held at both ends, or a 3D cantilever programmed at an
+    # angle to its tangent (its remanence in the material frame)
+    framed = held or (geometry == "3d" and support == "clamped" and any(
+        k in tables["magnetisation"] for k in ("angle_deg", "profile_deg",
+                                               "strength_profile")))
+    for table, keys, ok, what in (
+            ("rod", ("twist_ratio", "bending_ratio"), framed, "a rod that carries its frame "
+             "(support = \"clamped-clamped\", or a 3D rod programmed at an angle)"),
+            ("ends", tuple(tables["ends"]), held, "a rod held at both ends (support = "
+             "\"clamped-clamped\")")):
         for key in keys:
-            if key in tables[table] and not held:
-                fail(f"{table}.{key}", "belongs to a rod held at both ends (support = "
-                                       "\"clamped-clamped\")")
+            if key in tables[table] and not ok:
+                fail(f"{table}.{key}", f"belongs to {what}")
     inputs: dict[str, tuple[str, float]] = {}
     margins: dict[str, float] = {}
     taper = coefficients(rod, "stiffness_profile", "rod.", chebyshev_form("E I(s) / E I"))
@@ -293,8 +300,8 @@ def scene_from(data: dict) -> FileScene:
     if si and fields:
         m_key = "remanence" if kind == "hard" else "saturation"
         magnetisation = number(mag, m_key, "magnetisation.")
-    profile = angle_profile(mag, kind, "framed" if held else geometry)
-    strength = strength_profile(mag, kind, "framed" if held else geometry, fields)
+    profile = angle_profile(mag, kind, "framed" if framed else geometry)
+    strength = strength_profile(mag, kind, "framed" if framed else geometry, fields)
     for i, field in enumerate(fields):
         where = f"field.{i}."
         fkind = field["kind"]
@@ -399,9 +406,9 @@ def scene_from(data: dict) -> FileScene:
             continue
         terms[name] = PointDipole(M, c, np.array([u[0], 0.0, u[1]]), rail, along)
         inputs[f"{where}along"] = (f"{name}.along", 1.0 / L)
-    if held:
-        ends = held_ends(terms, inputs, tables, L**2 / bending if si else 1.0)
-        return FileScene(None, inputs, L, data, margins, ends)
+    if framed:
+        spec = framed_spec(terms, inputs, tables, L**2 / bending if si else 1.0, support)
+        return FileScene(None, inputs, L, data, margins, spec)
     scene = Scene(terms, geometry=geometry, support=support)
     return FileScene(scene, inputs, L, data, margins)
 
@@ -442,16 +449,17 @@ def presets() -> list[str]:
     return sorted(p.stem for p in RIGS.glob("*.toml"))
 
 
-def load(path: str | Path, settings: list[str] = (), held: bool = False) -> FileScene:
+def load(path: str | Path, settings: list[str] = (), framed: bool = False) -> FileScene:
     """The scene of the file at ``path`` (or of the shipped rig of that name, ``presets``),
-    with ``KEY=VALUE`` overrides (``apply_settings``). A rod held at both ends (support =
-    "clamped-clamped") only where ``held`` (the commands that take it say so)."""
+    with ``KEY=VALUE`` overrides (``apply_settings``). A rod that carries its frame (held at
+    both ends, or a 3D rod programmed at an angle) only where ``framed`` (the commands that
+    take it say so)."""
     path = Path(path)
     if not path.exists() and str(path) in presets():
         path = RIGS / f"{path}.toml"
     file = scene_from(apply_settings(read(path), list(settings)))
-    if file.held is not None and not held:
-        raise ParameterError("rod.support: a rod held at both ends (\"clamped-clamped\") is "
-                             "taken by jaxrod equilibrium and jaxrod branch; this command "
-                             "takes rods with a free end")
+    if file.framed is not None and not framed:
+        raise ParameterError("rod.support: a rod that carries its frame (held at both ends, "
+                             "or a 3D rod programmed at an angle) is taken by jaxrod "
+                             "equilibrium and jaxrod branch, not by this command")
     return file

@@ -64,7 +64,7 @@ def _seed(rod: TwistedRod, disc: FramedDiscretisation, turns: float, lam: float
     4 pi^2; under tension control the straight rod."""
     x = np.zeros(disc.size)
     if rod.shortening is None:
-        return np.concatenate([x, [0.0, 0.0, 0.0, lam]])
+        return np.concatenate([x, np.zeros(rod.constraints), [0.0, lam]])
     nodes = np.asarray(disc.field.nodes)[1:rod.n]
     x[:disc.free] = 2.0 * math.sqrt(rod.shortening) * np.sin(2.0 * math.pi * nodes)
     return np.concatenate([x, [0.0, 0.0, 1.0, 0.0, lam]])
@@ -81,11 +81,11 @@ def _regrid(rod: TwistedRod, state: TwistState, lam: float) -> np.ndarray:
         full = np.asarray(disc_old.field.to_full) @ state.x.reshape(3, -1).T
         values = spectral.interpolation_matrix(old.n, np.asarray(
             rod.discretisation().field.nodes)) @ full
-        x = values[1:rod.n].T.ravel()
-        w = np.concatenate([x, state.w[3 * (old.n - 1):]])
+        x = values[1:1 + rod.free_values].T.ravel()
+        w = np.concatenate([x, state.w[3 * old.free_values:]])
     if rod.constraints == 2 and old.constraints == 3:
         # held at its height -> pulled by the tension that held it there: the same state
-        w = np.concatenate([w[:3 * (rod.n - 1) + 2], w[-2:]])
+        w = np.concatenate([w[:3 * rod.free_values + 2], w[-2:]])
     elif rod.constraints != old.constraints:
         raise ParameterError("start: a state under tension control cannot start a rod "
                              "under shortening control (give a state of the same rod)")
@@ -151,6 +151,9 @@ def twist_branch(rod: TwistedRod, to: float, *, vary: str = "turns",
     where it changes without a fold the branch point is refined (``branch_points``)."""
     if not math.isfinite(to):
         raise ParameterError(f"to: a finite number, got {to!r}")
+    if vary == "turns" and rod.control == "free":
+        raise ParameterError("vary: a rod with a free end has no far clamp to turn; vary a "
+                             "load's input or load_scale")
     turns = (start.turns if start is not None else 0.0) if turns is None else float(turns)
     path = _path(rod, vary, turns, to)
     disc = rod.discretisation()
@@ -190,28 +193,36 @@ def twisted_equilibrium(rod: TwistedRod, turns: float, *, start: TwistState | No
     """The equilibrium at ``turns``. Without ``start``: under shortening control the one
     reached by turning the far end while it approaches (turns and shortening raised
     together from 5% of theirs, from the Euler-buckled rod: how PyElastica loads its
-    helical buckling case); under tension control by turning the straight rod. With a
+    helical buckling case); under tension control by turning the straight rod; with a free
+    end (turns 0) by raising the loads from the straight rod (the load scale). With a
     ``start``, by turning its far end from there (``twist_branch``; its ``options``), or at
     the same turns (another n, say) by Newton alone."""
     if not math.isfinite(turns):
         raise ParameterError(f"turns: a finite number, got {turns!r}")
+    if rod.control == "free" and turns != 0.0:
+        raise ParameterError("turns: a rod with a free end has no far clamp to turn (0)")
     disc = rod.discretisation()
     if start is not None and abs(start.turns - turns) <= 1e-12:
         path = _Path(("turns",), (0.0,), (1.0,))
         w = _regrid(rod, start, turns)
         lam = turns
     else:
-        if start is None and rod.shortening is not None:
-            first = 0.05
-            path = _Path(("turns", "shortening"), (0.0, 0.0), (float(turns), rod.shortening))
-            seed = dataclasses.replace(rod, shortening=first * rod.shortening)
-            w0 = _seed(seed, disc, first * turns, first)
+        steps = (options.get("ds", 0.05), options.get("ds_max", 0.5),
+                 options.get("ds_min", 1e-6), options.get("max_points", 400),
+                 options.get("max_folds", 10))
+        if start is None and rod.control != "tension":
+            if rod.control == "free":  # the load ramp from the straight rod
+                path = _Path(("load_scale",), (0.0,), (rod.load_scale,))
+                w0, name = _seed(rod, disc, 0.0, 0.0), "load_scale"
+            else:  # turned while it approaches
+                first = 0.05
+                path = _Path(("turns", "shortening"), (0.0, 0.0),
+                             (float(turns), rod.shortening))
+                seed = dataclasses.replace(rod, shortening=first * rod.shortening)
+                w0, name = _seed(seed, disc, first * turns, first), "approach"
             orient = np.zeros(len(w0))
             orient[-1] = 1.0
-            branch = _follow(rod, path, 0.0, w0, 1.0, orient, options.get("ds", 0.05),
-                             options.get("ds_max", 0.5), options.get("ds_min", 1e-6),
-                             options.get("max_points", 400), options.get("max_folds", 10),
-                             "approach")
+            branch = _follow(rod, path, 0.0, w0, 1.0, orient, *steps, name)
             lam = 1.0
         else:
             branch = twist_branch(rod, turns, start=start, **options)

@@ -90,8 +90,8 @@ def _node_terms(w, data, keys: tuple, count: int):
     turns, inputs, loads = _apply(keys, data, lam)
     jets = disc.jets(x, turns)
     X = tip(x, turns, disc)
-    grad_X = jax.grad(endpoint)(X, loads)
-    hess_X = jax.hessian(endpoint)(X, loads)
+    grad_X = jax.grad(endpoint)(X, inputs, loads)
+    hess_X = jax.hessian(endpoint)(X, inputs, loads)
 
     def phi(a, s):
         d3 = frame(a[0], a[1], a[2])[:, 2]

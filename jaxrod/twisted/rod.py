@@ -35,6 +35,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.discretise.framed import (
+    FRAMED_SUPPORTS,
     FramedDiscretisation,
     frame,
     framed_discretisation,
@@ -65,13 +66,24 @@ class TwistedRod:
     shortening: float | None = None
     n: int = 48
     loads: dict = dataclasses.field(default_factory=dict)
+    support: str = "clamped-clamped"
+    load_scale: float = 1.0
 
     def __post_init__(self):
         for name in ("twist_ratio", "bending_ratio"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ParameterError(f"{name}: a finite number > 0, got {value!r}")
-        if (self.tension is None) == (self.shortening is None):
+        if self.support not in FRAMED_SUPPORTS:
+            raise ParameterError(f"support: one of {', '.join(FRAMED_SUPPORTS)}, got "
+                                 f"{self.support!r}")
+        if not math.isfinite(self.load_scale):
+            raise ParameterError(f"load_scale: a finite number, got {self.load_scale!r}")
+        if self.support == "clamped":
+            if self.tension is not None or self.shortening is not None:
+                raise ParameterError("tension, shortening: a rod with a free end (support = "
+                                     "\"clamped\") takes neither")
+        elif (self.tension is None) == (self.shortening is None):
             raise ParameterError("tension, shortening: give exactly one (the far end pulled by "
                                  "a dead tension, or held at 1 - shortening)")
         if self.tension is not None and not math.isfinite(self.tension):
@@ -108,20 +120,27 @@ class TwistedRod:
 
     @property
     def control(self) -> str:
-        """"tension" or "shortening"."""
-        return "tension" if self.tension is not None else "shortening"
+        """"tension", "shortening" or "free" (support = "clamped")."""
+        return "free" if self.support == "clamped" else \
+            "tension" if self.tension is not None else "shortening"
 
     @property
     def constraints(self) -> int:
-        """How many constraints hold the far end: 2 (on the axis) or 3 (and its height)."""
-        return 2 if self.tension is not None else 3
+        """How many constraints hold the far end: 0 (free), 2 (on the axis) or 3 (and its
+        height)."""
+        return {"free": 0, "tension": 2, "shortening": 3}[self.control]
+
+    @property
+    def free_values(self) -> int:
+        """The free nodal values of one field: n - 1 (both ends held) or n (a free end)."""
+        return self.n if self.support == "clamped" else self.n - 1
 
     def discretisation(self, n: int | None = None) -> FramedDiscretisation:
-        return framed_discretisation(self.n if n is None else n, "clamped-clamped")
+        return framed_discretisation(self.n if n is None else n, self.support)
 
     def replace(self, key: str, value: float) -> TwistedRod:
         """A copy with the input ``key`` (``INPUTS`` or a load's "term.field[.i]") set."""
-        if key in ("twist_ratio", "bending_ratio", "tension", "shortening"):
+        if key in INPUTS:
             return dataclasses.replace(self, **{key: float(value)})
         name, field, index = _load_key(self, key)
         t = self.loads[name]
@@ -138,11 +157,11 @@ class TwistedRod:
     def inputs(self) -> jax.Array:
         """(gamma, beta, t, e): the traced inputs of ``lagrangian``."""
         return jnp.array([self.twist_ratio, self.bending_ratio, self.tension or 0.0,
-                          self.shortening or 0.0])
+                          self.shortening or 0.0, self.load_scale])
 
 
 #: The rod's own inputs, by name, in the order of ``TwistedRod.inputs``.
-INPUTS = ("twist_ratio", "bending_ratio", "tension", "shortening")
+INPUTS = ("twist_ratio", "bending_ratio", "tension", "shortening", "load_scale")
 
 
 def _axial(t) -> bool:
@@ -190,21 +209,22 @@ def density(a, s, inputs, loads: dict) -> jax.Array:
     (u1^2 + beta u2^2 + gamma u3^2) / 2 - t d3 . e3, plus every load's density, written in
     the director (d3, d3') or, where the term has a ``framed`` form (a remanence at an angle
     in the material frame), in the frame."""
-    gamma, beta, tension = inputs[0], inputs[1], inputs[2]
+    gamma, beta, tension, scale = inputs[0], inputs[1], inputs[2], inputs[4]
     F, dF, u = framed_jet3(a)
     e = 0.5 * (u[0] ** 2 + beta * u[1] ** 2 + gamma * u[2] ** 2) - tension * F[2, 2]
     for t in loads.values():
         if getattr(t, "framed", None) is not None:
-            e = e + t.framed(F, dF, s)
+            e = e + scale * t.framed(F, dF, s)
         elif t.density is not None:
-            e = e + t.density(F[:, 2], dF[:, 2], s)
+            e = e + scale * t.density(F[:, 2], dF[:, 2], s)
     return e
 
 
-def endpoint(X, loads: dict) -> jax.Array:
-    """The loads' potential of the far end's position X = int d3 (0 without one)."""
+def endpoint(X, inputs, loads: dict) -> jax.Array:
+    """The loads' potential of the far end's position X = int d3 (0 without one), times the
+    load scale."""
     terms = [t for t in loads.values() if t.endpoint is not None]
-    return sum((t.endpoint(X) for t in terms), jnp.zeros((), X.dtype))
+    return inputs[4] * sum((t.endpoint(X) for t in terms), jnp.zeros((), X.dtype))
 
 
 def tip(x, turns, disc: FramedDiscretisation) -> jax.Array:
@@ -218,7 +238,7 @@ def energy(x, turns, disc: FramedDiscretisation, inputs, loads: dict | None = No
     loads = {} if loads is None else loads
     e = disc.integrate(jax.vmap(density, in_axes=(0, 0, None, None))(
         disc.jets(x, turns), disc.quad_nodes, inputs, loads))
-    return e + endpoint(tip(x, turns, disc), loads)
+    return e + endpoint(tip(x, turns, disc), inputs, loads)
 
 
 def far_end(x, disc: FramedDiscretisation, inputs, count: int) -> jax.Array:

@@ -45,7 +45,7 @@ class TwistState:
 
     @property
     def x(self) -> np.ndarray:
-        return self.w[:3 * (self.rod.n - 1)]
+        return self.w[:3 * self.rod.free_values]
 
     @property
     def status(self) -> Status:
@@ -62,6 +62,14 @@ class TwistState:
 
         disc = self.rod.discretisation()
         return np.asarray(disc.field.nodes), centreline(disc, self.x)
+
+    def tip_tangent(self) -> np.ndarray:
+        """d3 at s = 1."""
+        from jaxrod.discretise.framed import frame
+
+        field = self.rod.discretisation().field
+        v = np.asarray(field.to_full)[-1] @ self.x.reshape(3, -1).T
+        return np.asarray(frame(*v)[:, 2])
 
     def as_dict(self) -> dict:
         return {"turns": self.turns, "twist_moment": self.twist_moment,
@@ -94,7 +102,7 @@ def _states(rod: TwistedRod, path: _Path, data, W, converged, residual, iteratio
     size = disc.size
     moment, tw, wr, turns, pull = (np.asarray(a) for a in _measures_program(
         jnp.asarray(W[:, :size]), jnp.asarray(W[:, -1]), path.keys, data))
-    tension = pull if rod.constraints == 2 else -MULTIPLIER_UNIT * W[:, size + 2]
+    tension = -MULTIPLIER_UNIT * W[:, size + 2] if rod.constraints == 3 else pull
     fields = np.asarray(disc.field.to_full) @ W[:, :size].reshape(len(W), 3, disc.free) \
         .transpose(0, 2, 1)
     tail = np.abs(np.einsum("kj,pjf->pkf", spectral.values_to_coefficients_matrix(rod.n),

@@ -1,8 +1,10 @@
-"""``jaxrod equilibrium RIG`` and ``jaxrod branch RIG --vary KEY`` for a rod held at both
-ends (support = "clamped-clamped", ``jaxrod.twisted``): the far end's twisting moment
-``twist_moment`` (M L / B) and ``tension`` (T L^2 / B, the clamp's pull), the twist and
-writhe, the count of unstable directions; along a branch its folds and ``branch_points``
-(their ``value`` in the varied key's unit: turns for ``ends.rotation_turns``)."""
+"""``jaxrod equilibrium RIG`` and ``jaxrod branch RIG --vary KEY`` for a rod that carries its
+frame (``jaxrod.twisted``): held at both ends (support = "clamped-clamped"), or a 3D
+cantilever programmed at an angle. The far end's twisting moment ``twist_moment``
+(M L / B) and ``tension`` (T L^2 / B, the clamp's pull), the twist and writhe, the tip's
+angles and position, the count of unstable directions; along a branch its folds and
+``branch_points`` (their ``value`` in the varied key's unit: turns for
+``ends.rotation_turns``)."""
 
 from __future__ import annotations
 
@@ -22,12 +24,12 @@ MOST_DEGREE = 384
 
 
 def twisted_rod(file, n: int):
-    """The ``TwistedRod`` of a file's rod held at both ends, at degree n."""
+    """The ``TwistedRod`` of a file's framed rod, at degree n."""
     from jaxrod.twisted.rod import DEFAULT_TWIST_RATIO, TwistedRod
 
-    h = file.held
+    h = file.framed
     return TwistedRod(DEFAULT_TWIST_RATIO if h.twist_ratio is None else h.twist_ratio,
-                      h.bending_ratio, h.tension, h.shortening, n, h.loads)
+                      h.bending_ratio, h.tension, h.shortening, n, h.loads, h.support)
 
 
 def _resolved(rod, turns: float):
@@ -50,19 +52,27 @@ def _degree(args) -> int:
 def _fields(state, file) -> dict:
     """A state's report, the file's length unit for the far end's position."""
     s, r = state.centreline()
+    tangent = state.tip_tangent()
     out = state.as_dict()
-    out.update(tip_angle_deg=0.0, tip_tangent_deg=0.0,
+    out.update(tip_angle_deg=float(np.degrees(np.arctan2(r[-1, 0], r[-1, 2]))),
+               tip_tangent_deg=float(np.degrees(np.arctan2(tangent[0], tangent[2]))),
                tip_position=[float(v) * file.length for v in r[-1]],
                stable=state.unstable == 0, residual_norm=state.residual,
                error_estimate=state.tail, message=state.status.message)
     return out
 
 
-def equilibrium_of_held(args, file) -> int:
-    state = _resolved(twisted_rod(file, _degree(args)), file.held.turns)
+def framed_equilibrium(args, file) -> int:
+    state = _resolved(twisted_rod(file, _degree(args)), file.framed.turns)
     out = {"rig": args.rig, "set": args.set, **_fields(state, file)}
     if args.json:
         print(json.dumps(out))
+    elif file.framed.support == "clamped":
+        print(f"{args.rig}: tip angle {out['tip_angle_deg']:.10f} deg, tip tangent "
+              f"{out['tip_tangent_deg']:.10f} deg, tip at "
+              f"({', '.join(f'{v:.6g}' for v in out['tip_position'])}); "
+              f"{'stable' if state.unstable == 0 else f'{state.unstable} unstable'}; "
+              f"{out['message']} (n = {state.rod.n}, Chebyshev tail {state.tail:.1e})")
     else:
         print(f"{args.rig}: {state.turns:.10g} turns, twisting moment M L/B = "
               f"{state.twist_moment:.10g}, tension T L^2/B = {state.tension:.10g}; Tw "
@@ -75,11 +85,12 @@ def equilibrium_of_held(args, file) -> int:
 def _rod_key(file, key: str) -> str:
     rod_key, factor = file.input_of(key)
     if factor != 1.0 and rod_key not in ("tension",) and "." not in rod_key:
-        raise ParameterError(f"vary: {key!r} cannot be varied on a rod held at both ends")
+        raise ParameterError(f"vary: {key!r} cannot be varied on a rod that carries its "
+                             "frame")
     return rod_key
 
 
-def branch_of_held(args, file, start: float, stop: float) -> int:
+def framed_branch(args, file, start: float, stop: float) -> int:
     """The branch along ``args.vary`` from ``start`` to ``stop`` (the file's units), from the
     file's equilibrium at ``start``."""
     from jaxrod.twisted.branch import twist_branch
@@ -90,7 +101,7 @@ def branch_of_held(args, file, start: float, stop: float) -> int:
     if key == "turns":
         first = _resolved(rod, start)
     else:
-        first = _resolved(rod.replace(key, start * factor), file.held.turns)
+        first = _resolved(rod.replace(key, start * factor), file.framed.turns)
     rod = first.rod
     branch = twist_branch(rod, stop * factor, vary=key, start=first)
     values = branch.column("value") / factor

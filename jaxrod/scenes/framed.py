@@ -1,7 +1,8 @@
-"""A scene file's rod held at both ends (support = "clamped-clamped"): its section's ratios,
-the far end's control (a dead tension or a shortening) and turns, and the scene's loads, as
-``jaxrod.twisted.TwistedRod`` takes them (``HeldEnds``), and the file keys that are its
-inputs."""
+"""A scene file's rod that carries its frame: held at both ends (support =
+"clamped-clamped"), or a 3D cantilever whose remanence is programmed at an angle to its
+tangent. Its section's ratios, the far end's control (a dead tension or a shortening) and
+turns, and the scene's loads, as ``jaxrod.twisted.TwistedRod`` takes them (``FramedSpec``),
+and the file keys that are its inputs."""
 
 from __future__ import annotations
 
@@ -14,11 +15,13 @@ from jaxrod.scenes.terms import TaperedBending
 
 
 @dataclasses.dataclass(frozen=True)
-class HeldEnds:
-    """twist_ratio (C / B, None: the rod's default), bending_ratio (B2 / B1), exactly one
-    of tension (T L^2 / B) and shortening, the far end's turns, and the loads (scene terms
-    by name, the rod's bending excluded)."""
+class FramedSpec:
+    """support ("clamped-clamped" or "clamped"), twist_ratio (C / B, None: the rod's
+    default), bending_ratio (B2 / B1), held at both ends exactly one of tension (T L^2 / B)
+    and shortening, the far end's turns, and the loads (scene terms by name, the rod's
+    bending excluded)."""
 
+    support: str
     twist_ratio: float | None
     bending_ratio: float
     tension: float | None
@@ -36,13 +39,15 @@ class HeldEnds:
         return float(v[int(index[0])] if index else v)
 
 
-def held_ends(terms: dict, inputs: dict, tables: dict, per_tension: float) -> HeldEnds:
-    """The held rod of a file's ``[rod]`` and ``[ends]`` tables and its terms; adds its keys
-    to ``inputs`` (file key -> (input, factor)). ``per_tension``: T L^2 / B per unit of the
-    file's tension (L^2 / (E I) in SI, 1 nondimensional)."""
+def framed_spec(terms: dict, inputs: dict, tables: dict, per_tension: float,
+                support: str) -> FramedSpec:
+    """The framed rod of a file's ``[rod]`` and ``[ends]`` tables and its terms; adds its
+    keys to ``inputs`` (file key -> (input, factor)). ``per_tension``: T L^2 / B per unit
+    of the file's tension (L^2 / (E I) in SI, 1 nondimensional)."""
     rod, ends = tables["rod"], tables["ends"]
     if isinstance(terms["bending"], TaperedBending):
-        fail("rod.stiffness_profile", "a rod held at both ends is uniform (no taper yet)")
+        fail("rod.stiffness_profile", "a rod that carries its frame is uniform (no taper "
+                                      "yet)")
     ratios = {}
     for key in ("twist_ratio", "bending_ratio"):
         if key in rod:
@@ -50,11 +55,13 @@ def held_ends(terms: dict, inputs: dict, tables: dict, per_tension: float) -> He
             if not ratios[key] > 0:
                 fail(f"rod.{key}", f"must be > 0, got {rod[key]!r}")
             inputs[f"rod.{key}"] = (key, 1.0)
-    if ("tension" in ends) == ("shortening" in ends):
+    tension = shortening = None
+    if support == "clamped":
+        pass
+    elif ("tension" in ends) == ("shortening" in ends):
         fail("ends", "give tension (a dead load pulling the far end) or shortening (the far "
                      "end held at (1 - shortening) L), one of them")
-    tension = shortening = None
-    if "tension" in ends:
+    elif "tension" in ends:
         tension = per_tension * number(ends, "tension", "ends.")
         inputs["ends.tension"] = ("tension", per_tension)
     else:
@@ -63,13 +70,14 @@ def held_ends(terms: dict, inputs: dict, tables: dict, per_tension: float) -> He
             fail("ends.shortening", f"must be in (0, 1) (a fraction of the length), got "
                                     f"{shortening!r}")
         inputs["ends.shortening"] = ("shortening", 1.0)
-    inputs["ends.rotation_turns"] = ("turns", 1.0)
+    if support != "clamped":
+        inputs["ends.rotation_turns"] = ("turns", 1.0)
     loads = {name: t for name, t in terms.items() if name != "bending"}
     for name, t in loads.items():
         if t.distributed is not None:
             fail(f"field.{name[5:]}" if name.startswith("field") else name,
-                 "a rod held at both ends takes uniform fields, gravity and magnets acting on "
-                 "its far end (not a programmed remanence in a magnet's field)")
-    return HeldEnds(ratios.get("twist_ratio"), ratios.get("bending_ratio", 1.0), tension,
+                 "a rod that carries its frame takes uniform fields, gravity and magnets "
+                 "acting on its far end (not a programmed remanence in a magnet's field)")
+    return FramedSpec(support, ratios.get("twist_ratio"), ratios.get("bending_ratio", 1.0), tension,
                     shortening, number(ends, "rotation_turns", "ends.", required=False,
                                        default=0.0), loads)
