@@ -145,6 +145,36 @@ def _loaded_rod(**kwargs) -> TwistedRod:
     return TwistedRod(loads=loads, **kwargs)
 
 
+@pytest.mark.slow
+def test_pyelastica_case_as_a_scene_file_is_reached_by_turning_while_approaching(tmp_path):
+    """PyElastica's case as a scene file (gamma = 0.789 / 1.345 to every digit, 3%
+    shortening, 27 turns): ``jaxrod equilibrium --json`` turns the far end while it
+    approaches at n = 48 and doubles n until resolved; its end moment and tension are the
+    closed form's to 1e-7 (the finite length), and the state is stable."""
+    import json
+
+    from command_line import run_cli
+
+    rig = tmp_path / "helical.toml"
+    rig.write_text(f"""units = "nondimensional"
+geometry = "3d"
+[rod]
+support = "clamped-clamped"
+twist_ratio = {PYELASTICA_GAMMA!r}
+[ends]
+rotation_turns = 27.0
+shortening = 0.03
+""")
+    proc = run_cli("equilibrium", rig, "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    m_ref, t_ref = _closed_form(PYELASTICA_GAMMA, 0.03, 27.0)
+    assert abs(out["twist_moment"] / m_ref - 1) <= 1e-7
+    assert abs(out["tension"] / t_ref - 1) <= 1e-7
+    assert out["stable"] and out["status"] == "success" and out["n"] >= 96
+    jax.clear_caches()
+
+
 def test_the_assembled_linearisation_is_the_lagrangians_derivatives():
     """The branch's residual and Jacobian, assembled from the nodes' 6 x 6 Hessians, the
     far-end terms' 3 x 3 Hessian and the path's column by forward mode, equal autodiff of
@@ -198,6 +228,7 @@ def test_the_straight_rods_branch_points_are_the_greenhill_moments():
     assert bent.points[1].turns < first.state.turns
 
 
+@pytest.mark.slow
 def test_an_axial_field_changes_nothing_under_shortening_control_but_the_reaction():
     """A hard-magnetic rod magnetised along its tangent in a field b = 5 along the axis,
     its far end held at 1 - e and turned once (the state reached by turning while
@@ -260,3 +291,63 @@ def test_the_command_line_on_a_rod_held_at_both_ends(tmp_path):
     assert proc.returncode == 0 and out["status"] == "success" and out["stable"]
     assert abs(out["twist_moment"] - 2 * math.pi * 0.769) <= 1e-12
     assert out["tension"] == 5.0 and out["turns"] == 1.0
+
+
+@pytest.mark.slow
+def test_the_framed_cantilever_in_an_opposed_field_buckles_at_pi_squared_over_four():
+    """A cantilever (a free end) that carries its frame, magnetised along its tangent, in a
+    field opposite its magnetisation raised from 0 to 4 (n = 16, the load path): the
+    straight rod's count of unstable directions jumps from 0 to 2 (in the plane and out of
+    it, the symmetry's two-dimensional kernel; the twist takes no part) at the tip-loaded
+    elastica's pi^2 / 4, to 1e-10."""
+    from jaxrod.scenes.terms import Zeeman
+
+    rod = TwistedRod(support="clamped", n=16, loads={"field0": Zeeman(0.0, math.pi)})
+    branch = twist_branch(rod, 4.0, vary="field0.load")
+    assert branch.complete and not branch.folds
+    first = branch.branch_points[0]
+    assert first.converged and first.unstable == (0, 2)
+    assert abs(first.value / (math.pi**2 / 4) - 1) <= 1e-10
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("rig, settings", [
+    ("cantilever", []),
+    ("cantilever", ["magnetisation.angle_deg=30.0"]),
+    ("permanent-magnet", ["field.0.angle_deg=20.0"]),
+])
+def test_planar_scenes_as_framed_rods_give_their_planar_numbers(rig, settings, tmp_path):
+    """Planar scenes (a hard-magnetic cantilever in a field across it, the same programmed
+    at 30 degrees to its tangent, the paper's rig with its magnet at 20 degrees) solved as
+    rods that carry their frame (n = 24, the load ramp from the straight rod): the tip angle
+    is the planar rod's (n = 24 and above until resolved) to 1e-9 degrees, the rod stays in
+    its plane, and its count of unstable directions (in the plane, out of it and in twist)
+    is zero where the planar state is stable and, where the 3D director model has the
+    term, stable out of the plane."""
+    from test_scene_files import CANTILEVER
+
+    from jaxrod.equilibria.resolution import resolved_equilibrium
+    from jaxrod.scenes.files import load
+    from jaxrod.three_d.scene_stability import out_of_plane_stability
+
+    path = rig
+    if rig == "cantilever":
+        path = tmp_path / "cantilever.toml"
+        text = CANTILEVER
+        if settings:
+            text = text.replace("remanence = 1.0e5", "remanence = 1.0e5\nangle_deg = 0.0")
+        path.write_text(text)
+    file = load(path, settings)
+    planar = resolved_equilibrium(file.scene, n=24)
+    assert planar.status.name == "SUCCESS"
+    loads = {k: t for k, t in file.scene.terms.items() if k != "bending"}
+    state = twisted_equilibrium(TwistedRod(support="clamped", n=24, loads=loads), 0.0)
+    assert state.status.name == "SUCCESS"
+    X = state.tip_position()
+    assert abs(math.degrees(math.atan2(X[0], X[2])) - planar.equilibrium.tip_angle_deg) <= 1e-9
+    assert np.max(np.abs(state.centreline()[1][:, 1])) <= 1e-12
+    stable = planar.equilibrium.stable
+    if not settings or rig != "cantilever":
+        stable = stable and out_of_plane_stability(
+            file.scene, planar.equilibrium.state, planar.n).stable_out_of_plane
+    assert (state.unstable == 0) == stable

@@ -51,12 +51,11 @@ def _degree(args) -> int:
 
 def _fields(state, file) -> dict:
     """A state's report, the file's length unit for the far end's position."""
-    s, r = state.centreline()
-    tangent = state.tip_tangent()
+    X, tangent = state.tip_position(), state.tip_tangent()
     out = state.as_dict()
-    out.update(tip_angle_deg=float(np.degrees(np.arctan2(r[-1, 0], r[-1, 2]))),
+    out.update(tip_angle_deg=float(np.degrees(np.arctan2(X[0], X[2]))),
                tip_tangent_deg=float(np.degrees(np.arctan2(tangent[0], tangent[2]))),
-               tip_position=[float(v) * file.length for v in r[-1]],
+               tip_position=[float(v) * file.length for v in X],
                stable=state.unstable == 0, residual_norm=state.residual,
                error_estimate=state.tail, message=state.status.message)
     return out

@@ -217,7 +217,7 @@ def _solve_at(size: int, count: int, keys: tuple, phase: bool, data, w0):
         R, J = _linearise(jnp.append(z, w0[-1]), aux, data, keys, count)
         return R, J[:, :m]
 
-    res = newton(None, w0[:m], None, tol=1e-10, linearise=linearise, keep_jacobian=True,
+    res = newton(None, w0[:m], None, linearise=linearise, keep_jacobian=True,
                  max_steps=60)
     eig, vec = jnp.linalg.eigh(0.5 * (res.jacobian + res.jacobian.T))
     return res, eig, vec, _phase(res.x[:size], data[0], phase)[2]

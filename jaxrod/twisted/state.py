@@ -63,6 +63,12 @@ class TwistState:
         disc = self.rod.discretisation()
         return np.asarray(disc.field.nodes), centreline(disc, self.x)
 
+    def tip_position(self) -> np.ndarray:
+        """X = int_0^1 d3 ds, by the energy's quadrature (rod lengths)."""
+        from jaxrod.twisted.rod import tip
+
+        return np.asarray(tip(jnp.asarray(self.x), self.turns, self.rod.discretisation()))
+
     def tip_tangent(self) -> np.ndarray:
         """d3 at s = 1."""
         from jaxrod.discretise.framed import frame
