@@ -137,44 +137,19 @@ def framed_branch(args, file, start: float, stop: float) -> int:
                                 out["unstable"]])
         np.savetxt(out_dir / "branch.csv", rows, delimiter=",", comments="",
                    header=f"{args.vary},twist_moment,tension,unstable")
-        _figure(out_dir / "branch.png", values, out, args.vary)
+        from jaxrod.cli.scene_file import branch_figure
+
+        branch_figure(out_dir / "branch.png", values, np.array(out["twist_moment"]),
+                      np.array(out["stable"]), out, args.vary, "twist_moment",
+                      "twisting moment M L / B")
     if args.json:
         print(json.dumps(out))
     else:
         print(f"{args.rig}: {len(values)} points along {args.vary} from {start:g} to "
               f"{stop:g}; {len(out['folds'])} folds, {len(out['branch_points'])} branch "
               f"points (n = {rod.n})")
-        for kind, items in (("fold", out["folds"]), ("branch point", out["branch_points"])):
-            for f in items:
-                print(f"  {kind} at {args.vary} = {f['value']:.10g} (twisting moment "
-                      f"{f['twist_moment']:.10g}, tension {f['tension']:.10g})"
-                      + ("" if f["converged"] else "  NOT CONVERGED"))
-        if not out["converged"]:
-            print(f"  {out['status']} (the branch ended at {args.vary} = "
-                  f"{out['last_value']:.10g}): {out['message']}")
+        from jaxrod.cli.scene_file import print_points
+
+        print_points(out, args.vary, lambda f: f"twisting moment {f['twist_moment']:.10g}, "
+                                               f"tension {f['tension']:.10g}")
     return 0 if out["converged"] else 1
-
-
-def _figure(path, values, out, vary) -> None:
-    """The twisting moment against the varied input: stable solid, unstable dashed, folds
-    (x) and branch points (o)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    m, stable = np.array(out["twist_moment"]), np.array(out["stable"])
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    for mask, style, colour, label in ((stable, "-", "C0", "stable"),
-                                       (~stable, "--", "C3", "unstable")):
-        ax.plot(values, np.where(mask, m, np.nan), style, color=colour, label=label)
-    for key, marker, label in (("folds", "kx", "fold"), ("branch_points", "ko",
-                                                          "branch point")):
-        if out[key]:
-            ax.plot([p["value"] for p in out[key]], [p["twist_moment"] for p in out[key]],
-                    marker, mfc="none", label=label)
-    ax.set_xlabel(vary)
-    ax.set_ylabel("twisting moment M L / B")
-    ax.legend(fontsize=8)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)

@@ -160,48 +160,55 @@ def branch_on_file(args) -> int:
             None else ""
         np.savetxt(out_dir / "branch.csv", rows, delimiter=",",
                    header=f"{args.vary},tip_angle_deg,min_eig,morse_index{extra}", comments="")
-        _branch_figure(out_dir / "branch.png", values, b, out, args.vary)
+        branch_figure(out_dir / "branch.png", values, np.degrees(b.tip), b.stable, out,
+                      args.vary)
     if args.json:
         print(json.dumps(out))
     else:
         print(f"{args.rig}: {len(values)} points along {args.vary} from {args.start:g} to "
               f"{args.stop:g}; {len(folds)} folds, {len(points)} branch points")
-        for kind, items in (("fold", out["folds"]), ("branch point", out["branch_points"])):
-            for f in items:
-                print(f"  {kind} at {args.vary} = {f['value']:.10g} (tip angle "
-                      f"{f['tip_angle_deg']:.6f} deg)"
-                      + ("" if f["converged"] else "  NOT CONVERGED"))
-        if not out["converged"]:
-            print(f"  {out['status']} (the branch ended at {args.vary} = "
-                  f"{out['last_value']:.10g}): {out['message']}")
+        print_points(out, args.vary, lambda f: f"tip angle {f['tip_angle_deg']:.6f} deg")
     return 0 if out["converged"] else 1
 
 
-def _branch_figure(path, values, b, out, vary) -> None:
-    """The tip angle against the varied input: stable solid, unstable dashed, the refined
-    folds (x) and branch points (o), the branch's end marked when it stopped early."""
+def print_points(out: dict, vary: str, describe) -> None:
+    """The folds and branch points of a branch's report, a line each (``describe``: what
+    to say of a point), and where it ended when it stopped early."""
+    for kind, items in (("fold", out["folds"]), ("branch point", out["branch_points"])):
+        for f in items:
+            print(f"  {kind} at {vary} = {f['value']:.10g} ({describe(f)})"
+                  + ("" if f["converged"] else "  NOT CONVERGED"))
+    if not out["converged"]:
+        print(f"  {out['status']} (the branch ended at {vary} = {out['last_value']:.10g}): "
+              f"{out['message']}")
+
+
+def branch_figure(path, values, y, stable, out, vary, key: str = "tip_angle_deg",
+                  label: str = "tip angle (deg)") -> None:
+    """A branch's ``y`` (the tip angle; ``key`` of its points in ``out``) against the
+    varied input: stable solid, unstable dashed, the folds (x) and branch points (o), the
+    branch's end marked when it stopped early."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    tip, stable = np.degrees(b.tip), b.stable
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    for mask, style, colour, label in ((stable, "-", "C0", "stable"),
-                                       (~stable, "--", "C3", "unstable")):
-        ax.plot(values, np.where(mask, tip, np.nan), style, color=colour, label=label)
-    if np.ptp(tip) < 1e-6:  # a straight branch: its round-off is not a shape
-        ax.set_ylim(np.mean(tip) - 1.0, np.mean(tip) + 1.0)
-    for key, marker, label in (("folds", "kx", "fold"), ("branch_points", "ko",
+    for mask, style, colour, name in ((stable, "-", "C0", "stable"),
+                                      (~stable, "--", "C3", "unstable")):
+        ax.plot(values, np.where(mask, y, np.nan), style, color=colour, label=name)
+    if np.ptp(y) < 1e-6:  # a straight branch: its round-off is not a shape
+        ax.set_ylim(np.mean(y) - 1.0, np.mean(y) + 1.0)
+    for kind, marker, name in (("folds", "kx", "fold"), ("branch_points", "ko",
                                                           "branch point")):
-        pts = out[key]
+        pts = out[kind]
         if pts:
-            ax.plot([p["value"] for p in pts], [p["tip_angle_deg"] for p in pts], marker,
-                    mfc="none", label=label)
+            ax.plot([p["value"] for p in pts], [p[key] for p in pts], marker, mfc="none",
+                    label=name)
     if not out["complete"]:
-        ax.plot(values[-1:], tip[-1:], "r|", ms=14, label=f"ended: {out['status']}")
+        ax.plot(values[-1:], y[-1:], "r|", ms=14, label=f"ended: {out['status']}")
     ax.set_xlabel(vary)
-    ax.set_ylabel("tip angle (deg)")
+    ax.set_ylabel(label)
     ax.legend(fontsize=8)
     fig.savefig(path, dpi=120)
     plt.close(fig)
