@@ -1,15 +1,13 @@
 """The framed rod's chart (``jaxrod.discretise.framed``): the frame, its Darboux vector, and
-the twisted clamped-clamped rod's buckling against independent methods.
+the independent reference for the twisted clamped-clamped rod's buckling
+(``_critical_moment_by_determinant``, used by tests/test_twisted.py).
 
-The buckling check: a straight rod (B = 1, L = 1, C / B = gamma) clamped at both ends, the
-far end turned by N turns about the axis and pulled by a dead tension t, its far end held on
-the axis (int d3_x ds = int d3_y ds = 0). The straight state carries the twisting moment
-M = gamma 2 pi N; it loses stability where the second variation restricted to the
-constraints' tangent space first has a zero eigenvalue (a double one: the rotational
-symmetry). Independent: the linearised Kirchhoff equations for the deflection w = x + i y,
-w'''' - i M w''' - t w'' = 0, w = w' = 0 at both ends, a nontrivial solution where the 2 x 2
-block of the fundamental matrix expm(A) (A the companion matrix; scipy) is singular; at
-t = 0 this is M = 2 x with tan x = x.
+The buckling reference: a straight rod (B = 1, L = 1) clamped at both ends, the far end
+turned about the axis and pulled by a dead tension t, loses stability at the twisting
+moment M where the linearised Kirchhoff equations for the deflection w = x + i y,
+w'''' - i M w''' - t w'' = 0, w = w' = 0 at both ends, have a nontrivial solution: where
+the 2 x 2 block of the fundamental matrix expm(A) (A the companion matrix; scipy) is
+singular; at t = 0 this is M = 2 x with tan x = x.
 """
 
 import math
@@ -24,33 +22,6 @@ from jaxrod.discretise.framed import frame, framed_discretisation, framed_jet
 from jaxrod.params import ParameterError
 
 RNG = np.random.default_rng(7)
-GAMMA = 0.769
-
-
-def _energy(disc, tension=0.0, turns=0.0):
-    """E(x) = 1/2 int (u1^2 + u2^2 + gamma u3^2) ds - tension int d3_z ds (B = 1, L = 1)."""
-
-    def energy(x, args=None):
-        def density(a):
-            F, u = framed_jet(a)
-            return 0.5 * (u[0] ** 2 + u[1] ** 2) + 0.5 * GAMMA * u[2] ** 2 - tension * F[2, 2]
-        return disc.integrate(jax.vmap(density)(disc.jets(x, turns)))
-
-    return energy
-
-
-def _far_end(disc, shortening=None):
-    """g(x): the far end on the axis (int d3_x = int d3_y = 0) and, with ``shortening``, at
-    height 1 - shortening."""
-
-    def g(x, args=None):
-        d3 = jax.vmap(lambda a: framed_jet(a)[0][:, 2])(disc.jets(x, 0.0))
-        ends = [disc.integrate(d3[:, 0]), disc.integrate(d3[:, 1])]
-        if shortening is not None:
-            ends.append(disc.integrate(d3[:, 2]) - (1.0 - shortening))
-        return jnp.stack(ends)
-
-    return g
 
 
 @pytest.mark.parametrize("scale", [1.0, 1e-3])
@@ -118,73 +89,3 @@ def _critical_moment_by_determinant(t: float) -> float:
     values = np.array([g(m) for m in grid])
     i = int(np.nonzero(np.sign(values[:-1]) != np.sign(values[1:]))[0][0])
     return brentq(g, grid[i], grid[i + 1], xtol=1e-14)
-
-
-def test_the_twisting_moment_that_buckles_a_clamped_clamped_rod_under_tension():
-    """The Greenhill problem of the clamped-clamped rod (module docstring), gamma = 0.769, at
-    N = 16: the twisting moment at which the straight rod first has a zero eigenvalue of the
-    constrained second variation, found by brentq on the smallest one, is the determinant
-    method's to 1e-8 at t = -10, 10 and 100, and 2 x with tan x = x at t = 0."""
-    from scipy.linalg import null_space
-    from scipy.optimize import brentq
-
-    disc = framed_discretisation(16, "clamped-clamped")
-    x0 = jnp.zeros(disc.size)
-    Z = null_space(np.asarray(jax.jacfwd(_far_end(disc))(x0)))
-    hessian = jax.jit(jax.hessian(lambda x, turns, t: _energy(disc, t, turns)(x)))
-    smallest = lambda turns, t: np.linalg.eigvalsh(Z.T @ np.asarray(hessian(x0, turns, t))
-                                                   @ Z)[0]
-    x = brentq(lambda v: math.tan(v) - v, 4.0, 4.6, xtol=1e-15)
-    for t, reference in ((0.0, 2 * x), (-10.0, None), (10.0, None), (100.0, None)):
-        reference = reference or _critical_moment_by_determinant(t)
-        turns = brentq(lambda v: smallest(v, t), 0.2, 8.0, xtol=1e-14)
-        assert abs(GAMMA * 2 * math.pi * turns - reference) <= 1e-8
-        if t == 0.0:
-            assert abs(_critical_moment_by_determinant(t) - reference) <= 1e-10
-
-
-def test_a_clamped_clamped_rod_shortened_is_the_euler_elastica():
-    """The far end held at 1 - e on the axis (e = 0.1), no turns: the constrained equilibrium
-    (``jaxrod.solvers.constrained``) from the first buckling mode is the inflexional
-    elastica of four quarter waves, whose thrust is P L^2 / B = 16 K(k)^2 with
-    2 E(k) / K(k) - 1 = 1 - e (complete elliptic integrals, modulus k; scipy), here the
-    multiplier of the height constraint, to 1e-10 at N = 24; the side reactions vanish. Its
-    constrained second variation has one zero eigenvalue (the shape turned about the axis,
-    with the frame turned back: a symmetry of the isotropic rod) and no negative one."""
-    from scipy.optimize import brentq
-    from scipy.special import ellipe, ellipk
-
-    from jaxrod import spectral
-    from jaxrod.solvers.constrained import constrained_eigenvalues, constrained_equilibrium
-
-    e, n = 0.1, 24
-    disc = framed_discretisation(n, "clamped-clamped")
-    energy, held = _energy(disc), _far_end(disc, e)
-    x0 = np.zeros(disc.size)
-    x0[:disc.free] = 0.6 * np.sin(2 * np.pi * spectral.chebyshev_nodes(n)[1:n])
-    out = constrained_equilibrium(energy, held, x0, jnp.array([0.0, 0.0, 4 * np.pi**2]))
-    assert bool(out.converged)
-    x, mu = np.asarray(out.x[:disc.size]), np.asarray(out.x[disc.size:])
-    k = brentq(lambda k: 2 * ellipe(k**2) / ellipk(k**2) - 1 - (1 - e), 1e-6, 0.999,
-               xtol=1e-15)
-    assert abs(mu[2] - 16 * ellipk(k**2) ** 2) <= 1e-10
-    assert np.max(np.abs(mu[:2])) <= 1e-12
-    eig = np.asarray(constrained_eigenvalues(energy, held, jnp.asarray(x), jnp.asarray(mu)))
-    assert abs(eig[0]) <= 1e-10 and eig[1] > 0.1
-
-
-def test_twist_and_writhe_add_up_to_the_far_ends_turns():
-    """A rod clamped at both ends keeps its linking number: for a smooth bent and twisted
-    state (|v| < pi) with the far end turned by 1.7 turns, Tw + Wr (Fuller's writhe against
-    the straight rod) is 1.7 to 1e-12 at N = 24; neither alone is (the state writhes)."""
-    from jaxrod import spectral
-    from jaxrod.discretise.framed import twist_and_writhe
-
-    n = 24
-    disc = framed_discretisation(n, "clamped-clamped")
-    s = spectral.chebyshev_nodes(n)[1:n]
-    x = np.concatenate([1.4 * np.sin(np.pi * s) ** 2 * np.cos(3 * s),
-                        1.1 * np.sin(2 * np.pi * s), 0.8 * np.sin(np.pi * s)])
-    tw, wr = twist_and_writhe(disc, jnp.asarray(x), 1.7)
-    assert abs(float(tw + wr) - 1.7) <= 1e-12
-    assert abs(float(wr)) > 0.01

@@ -44,6 +44,7 @@ def test_bad_inputs_are_named(kwargs, name):
         TwistedRod(**kwargs)
 
 
+@pytest.mark.slow
 def test_the_branch_keeps_its_linking_number_and_its_end_moment_is_the_twist_at_the_end():
     """Shortening 0.1, gamma = 0.7, from the Euler-buckled rod to 3 turns at n = 32: every
     point converged (its residual below the corrector's 1e-10); Tw + Wr = turns to 1e-12
@@ -202,26 +203,31 @@ def test_the_assembled_linearisation_is_the_lagrangians_derivatives():
 
 
 def test_the_straight_rods_branch_points_are_the_greenhill_moments():
-    """The straight rod turned from 0 to 4 turns at n = 16 under tension t = 10 and -10: the
-    branch's count of unstable directions jumps by 2 (the rotational symmetry's
-    two-dimensional kernel, where a determinant would not change sign); the first branch
-    point's twisting moment is the linearised equations' (the determinant method of
-    tests/test_framed.py) to 1e-8. At t = 10 half the pull is a field b = 5 along the axis
-    on the rod's axial remanence (energy -b int d3 . e3: a dead load). The bent branch
-    leaves the branch point subcritically (toward fewer turns), one direction unstable."""
+    """The straight rod turned from 0 to 5 turns at n = 16 under tension t = 10, 0, 100
+    and -10: the branch's count of unstable directions jumps by 2 (the rotational
+    symmetry's two-dimensional kernel, where a determinant would not change sign); the
+    first branch point's twisting moment is the linearised equations' (the determinant
+    method of tests/test_framed.py; at t = 0 2 x with tan x = x) to 1e-8. At t = 10 half
+    the pull is a field b = 5 along the axis on the rod's axial remanence (energy
+    -b int d3 . e3: a dead load). The bent branch leaves the branch point subcritically
+    (toward fewer turns), one direction unstable."""
+    from scipy.optimize import brentq
     from test_framed import _critical_moment_by_determinant
 
     from jaxrod.scenes.terms import Zeeman
     from jaxrod.twisted.branch import switch_branch
 
-    for t, b in ((10.0, 5.0), (-10.0, 0.0)):
+    x = brentq(lambda v: math.tan(v) - v, 4.0, 4.6, xtol=1e-15)
+    for t, b, reference in ((100.0, 0.0, None), (0.0, 0.0, 2 * x), (10.0, 5.0, None),
+                            (-10.0, 0.0, None)):
         rod = TwistedRod(twist_ratio=0.769, tension=t - b, n=16,
                          loads={"field0": Zeeman(b)})
-        branch = twist_branch(rod, 4.0)
+        branch = twist_branch(rod, 5.0)
         assert branch.complete and not branch.folds
         first = branch.branch_points[0]
         assert first.converged and first.unstable == (0, 2)
-        assert abs(first.state.twist_moment / _critical_moment_by_determinant(t) - 1) <= 1e-8
+        reference = reference or _critical_moment_by_determinant(t)
+        assert abs(first.state.twist_moment / reference - 1) <= 1e-8
     bent = switch_branch(first, 0.0, ds_max=0.3)
     assert bent.complete and all(p.unstable == 1 for p in bent.points)
     assert all(p.converged and p.residual <= 1e-10 for p in bent.points)
@@ -351,3 +357,31 @@ def test_planar_scenes_as_framed_rods_give_their_planar_numbers(rig, settings, t
         stable = stable and out_of_plane_stability(
             file.scene, planar.equilibrium.state, planar.n).stable_out_of_plane
     assert (state.unstable == 0) == stable
+
+
+@pytest.mark.slow
+def test_the_framed_cantilevers_folds_are_the_planar_rods(tmp_path):
+    """The shipped hard-magnetic cantilever (load 5) as a rod that carries its frame
+    (n = 24), its field turned from 90 to 300 degrees: the branch's folds, refined where the
+    path parameter turns back (``jaxrod.twisted.folds``), are the planar engine's folds
+    (``jaxrod folds``, refined by their extended system) to 1e-9 degrees."""
+    import json
+
+    from command_line import run_cli
+
+    from jaxrod.scenes.files import load
+
+    proc = run_cli("folds", "hard-magnetic-cantilever", "--vary", "field.0.angle_deg",
+                   "--from", "90", "--to", "300", "--json")
+    planar = [f["value"] for f in json.loads(proc.stdout)["folds"]]
+    assert proc.returncode == 0 and planar
+    file = load("hard-magnetic-cantilever")
+    loads = {k: t for k, t in file.scene.terms.items() if k != "bending"}
+    rod = TwistedRod(support="clamped", n=24, loads=loads)
+    start = twisted_equilibrium(rod, 0.0)
+    branch = twist_branch(rod, math.radians(300.0), vary="field0.angle", start=start,
+                          ds_max=0.2)
+    framed = [math.degrees(f.value) for f in branch.fold_points]
+    assert all(f.converged for f in branch.fold_points)
+    assert len(framed) == len(planar)
+    assert max(abs(a - b) for a, b in zip(framed, planar)) <= 1e-9

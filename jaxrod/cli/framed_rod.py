@@ -106,7 +106,7 @@ def framed_branch(args, file, start: float, stop: float) -> int:
     values = branch.column("value") / factor
     tails = branch.column("tail")
     ok = all(p.converged for p in branch.points) and all(
-        p.converged for p in branch.branch_points)
+        p.converged for p in branch.branch_points + branch.fold_points)
     status = (Status(branch.status) if not branch.complete and branch.status in
               {s.value for s in Status} else Status.NOT_CONVERGED if not ok or not
               branch.complete else Status.UNDER_RESOLVED if np.max(tails) > 1e-8
@@ -120,7 +120,8 @@ def framed_branch(args, file, start: float, stop: float) -> int:
            "tension": branch.column("tension").tolist(),
            "unstable": branch.column("unstable").tolist(),
            "stable": [bool(u == 0) for u in branch.column("unstable")],
-           "folds": [point(branch.points[i]) for i in branch.folds],
+           "folds": [{**point(f.state), "converged": f.converged}
+                     for f in branch.fold_points],
            "branch_points": [{**point(p.state), "unstable": list(p.unstable),
                               "kernel_dimension": abs(p.unstable[1] - p.unstable[0]),
                               "converged": p.converged} for p in branch.branch_points],

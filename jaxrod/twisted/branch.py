@@ -21,6 +21,7 @@ from jaxrod.solvers.continuation import STATUS_MESSAGES
 from jaxrod.status import Status
 from jaxrod.twisted.branch_points import TwistBranchPoint, _refine
 from jaxrod.twisted.equations import _Path, _run_program, _solve_program
+from jaxrod.twisted.folds import refine_fold
 from jaxrod.twisted.rod import INPUTS, TwistedRod, _load_key
 from jaxrod.twisted.state import TwistState, _states
 
@@ -32,9 +33,9 @@ __all__ = ["TwistBranch", "TwistBranchPoint", "TwistState", "switch_branch", "tw
 class TwistBranch:
     """A branch of a twisted rod along one of its inputs (``vary``; the end rotation in
     turns by default): ``points`` (TwistState, in order), ``folds`` (the indices where the
-    input's direction along the branch changes sign: the point after the turn, located to
-    the step, not refined), ``branch_points`` (TwistBranchPoint, refined), ``status`` and
-    its message."""
+    input's direction along the branch changes sign: the point after the turn),
+    ``fold_points`` (TwistFold, each fold refined: ``jaxrod.twisted.folds``),
+    ``branch_points`` (TwistBranchPoint, refined), ``status`` and its message."""
 
     rod: TwistedRod
     points: list[TwistState]
@@ -42,6 +43,7 @@ class TwistBranch:
     status: int
     vary: str = "turns"
     branch_points: list = dataclasses.field(default_factory=list)
+    fold_points: list = dataclasses.field(default_factory=list)
 
     @property
     def message(self) -> str:
@@ -133,7 +135,8 @@ def _follow(rod: TwistedRod, path: _Path, turns: float, w0, lam_to: float, orien
     found = [_refine(rod, path, data, points[i - 1], points[i]) for i in range(1, num)
              if points[i].unstable != points[i - 1].unstable and i not in folds
              and points[i].converged and points[i - 1].converged]
-    return TwistBranch(rod, points, folds, int(out.status), vary, found)
+    turns_back = [refine_fold(rod, path, data, points[i - 1], points[i]) for i in folds]
+    return TwistBranch(rod, points, folds, int(out.status), vary, found, turns_back)
 
 
 def twist_branch(rod: TwistedRod, to: float, *, vary: str = "turns",

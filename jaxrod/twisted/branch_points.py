@@ -37,6 +37,29 @@ class TwistBranchPoint:
                 "converged": self.converged}
 
 
+def illinois(f, a: float, b: float, ftol: float, xtol: float, steps: int = 60
+             ) -> tuple[float, float]:
+    """(x, f(x)): a root of f between a and b (f(a) f(b) < 0; f evaluated at a and b
+    first, then at each iterate) by the Illinois variant of false position, to |f| <= ftol
+    or a bracket below xtol (relative to max(1, |x|)); the last iterate."""
+    fa, fb = f(a), f(b)
+    x, fx, side = a, fa, 0
+    for _ in range(steps):
+        x = (a * fb - b * fa) / (fb - fa)
+        fx = f(x)
+        if abs(fx) <= ftol or abs(b - a) <= xtol * max(1.0, abs(x)):
+            break
+        if fx * fa > 0:
+            a, fa = x, fx
+            fb = 0.5 * fb if side == -1 else fb
+            side = -1
+        else:
+            b, fb = x, fx
+            fa = 0.5 * fa if side == 1 else fa
+            side = 1
+    return x, fx
+
+
 def _refine(rod: TwistedRod, path: _Path, data, a: TwistState, b: TwistState
             ) -> TwistBranchPoint:
     """The branch point between the neighbours a and b: the path parameter where the
@@ -57,24 +80,15 @@ def _refine(rod: TwistedRod, path: _Path, data, a: TwistState, b: TwistState
                                           rod.symmetric, data, jnp.asarray(w))
         return res, float(eig[q]), np.asarray(vec[:, q]), lam
 
-    (_, ga, _, la), (_, gb, _, lb) = at(lo.w[-1]), at(hi.w[-1])
-    best = None
-    side = 0
-    for _ in range(60):
-        lam = (la * gb - lb * ga) / (gb - ga)
+    found = {}
+
+    def crossing(lam):
         res, g, vec, _ = at(lam)
-        best = (res, g, vec, lam)
-        if abs(g) <= 1e-12 or abs(lb - la) <= 1e-13 * max(1.0, abs(lam)):
-            break
-        if g * ga > 0:
-            la, ga = lam, g
-            gb = gb * 0.5 if side == -1 else gb
-            side = -1
-        else:
-            lb, gb = lam, g
-            ga = ga * 0.5 if side == 1 else ga
-            side = 1
-    res, g, vec, lam = best
+        found[lam] = (res, g, vec, lam)
+        return g
+
+    lam, _ = illinois(crossing, lo.w[-1], hi.w[-1], ftol=1e-12, xtol=1e-13)
+    res, g, vec, lam = found[lam]
     eig_count = np.sum(np.asarray(_solve_program(
         disc.size, rod.constraints, path.keys, rod.symmetric, data,
         jnp.asarray(np.append(np.asarray(res.x), lam)))[1]) < 0)
