@@ -176,6 +176,7 @@ shortening = 0.03
     jax.clear_caches()
 
 
+@pytest.mark.slow
 def test_the_assembled_linearisation_is_the_lagrangians_derivatives():
     """The branch's residual and Jacobian, assembled from the nodes' 6 x 6 Hessians, the
     far-end terms' 3 x 3 Hessian and the path's column by forward mode, equal autodiff of
