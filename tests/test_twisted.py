@@ -386,3 +386,21 @@ def test_the_framed_cantilevers_folds_are_the_planar_rods(tmp_path):
     assert all(f.converged for f in branch.fold_points)
     assert len(framed) == len(planar)
     assert max(abs(a - b) for a, b in zip(framed, planar)) <= 1e-9
+
+
+def test_the_phase_condition_is_on_only_where_the_whole_path_keeps_the_symmetry():
+    """A symmetric rod (an axial field) keeps its phase condition along its turns or its
+    field's strength, and drops it along the field's angle or the bending ratio, which
+    break the symmetry part way (a phase condition there would force states that are no
+    equilibria); a rod whose field is across the axis has none."""
+    from jaxrod.scenes.terms import Zeeman
+    from jaxrod.twisted.equations import _Path
+
+    axial = TwistedRod(tension=1.0, n=8, loads={"field0": Zeeman(2.0)})
+    across = TwistedRod(tension=1.0, n=8, loads={"field0": Zeeman(2.0, 1.0)})
+    assert axial.symmetric and not across.symmetric
+    for keys, on in ((("turns",), True), (("field0.load",), True),
+                     (("turns", "shortening"), True), (("field0.angle",), False),
+                     (("bending_ratio",), False)):
+        path = _Path(keys, (0.0,) * len(keys), (1.0,) * len(keys))
+        assert path.phase(axial) == on and not path.phase(across)

@@ -13,7 +13,6 @@ import json
 
 import numpy as np
 
-from jaxrod.params import ParameterError
 from jaxrod.status import Status
 
 #: The path's degree where --n is not given: a localised helix of tens of turns needs it
@@ -81,21 +80,12 @@ def framed_equilibrium(args, file) -> int:
     return 0 if state.status == Status.SUCCESS else 1
 
 
-def _rod_key(file, key: str) -> str:
-    rod_key, factor = file.input_of(key)
-    if factor != 1.0 and rod_key not in ("tension",) and "." not in rod_key:
-        raise ParameterError(f"vary: {key!r} cannot be varied on a rod that carries its "
-                             "frame")
-    return rod_key
-
-
 def framed_branch(args, file, start: float, stop: float) -> int:
     """The branch along ``args.vary`` from ``start`` to ``stop`` (the file's units), from the
     file's equilibrium at ``start``."""
     from jaxrod.twisted.branch import twist_branch
 
-    key = _rod_key(file, args.vary)
-    factor = file.input_of(args.vary)[1]
+    key, factor = file.input_of(args.vary)
     rod = twisted_rod(file, _degree(args))
     if key == "turns":
         first = _resolved(rod, start)

@@ -120,7 +120,7 @@ def _follow(rod: TwistedRod, path: _Path, turns: float, w0, lam_to: float, orien
     data = path.data(rod, turns, disc)
     lo, hi = sorted((float(w0[-1]), float(lam_to)))
     control = StepControl(ds, ds_min, ds_max, 1.5, 1e-10, max_folds)
-    out = _run_program(disc.size, rod.constraints, path.keys, rod.symmetric, max_points,
+    out = _run_program(disc.size, rod.constraints, path.keys, path.phase(rod), max_points,
                        data, jnp.asarray(w0), jnp.asarray(orient),
                        jnp.array([lo - 1e-12, hi + 1e-12]), control)
     num = int(out.num_points)
@@ -179,16 +179,15 @@ def switch_branch(point: TwistBranchPoint, to: float, *, amplitude: float = 0.02
     then followed toward ``to`` (in the branch's input) as ``twist_branch`` does."""
     state, path = point.state, point.path
     rod = state.rod
-    base_rod = path.rod_at(rod, -path.origin[0] / path.span[0])[1] if path.keys[0] != "turns" \
-        else rod
     phi = point.kernel / np.sqrt(np.mean(point.kernel ** 2))
     w0 = np.array(state.w)
     w0[:len(phi)] += amplitude * phi
     orient = np.zeros(len(w0))
     orient[:len(phi)] = phi
     lam_to = path.lam(to)
-    return _follow(base_rod if path.keys[0] != "turns" else rod, path, state.turns, w0,
-                   lam_to, orient, ds, ds_max, ds_min, max_points, max_folds, path.keys[0])
+    # the path sets its own input, so the branch point's rod serves as the path's base
+    return _follow(rod, path, state.turns, w0, lam_to, orient, ds, ds_max, ds_min,
+                   max_points, max_folds, path.keys[0])
 
 
 def twisted_equilibrium(rod: TwistedRod, turns: float, *, start: TwistState | None = None,
@@ -242,7 +241,7 @@ def twisted_equilibrium(rod: TwistedRod, turns: float, *, start: TwistState | No
         w = (1 - f) * a.w + f * b.w
         w[-1] = lam
     data = path.data(rod, turns, disc)
-    res, eig, _, _ = _solve_program(disc.size, rod.constraints, path.keys, rod.symmetric,
+    res, eig, _, _ = _solve_program(disc.size, rod.constraints, path.keys, path.phase(rod),
                                     data, jnp.asarray(w))
     full = np.append(np.asarray(res.x), lam)
     return _states(rod, path, data, full, [res.converged], [res.residual_norm],

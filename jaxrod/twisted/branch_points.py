@@ -68,7 +68,7 @@ def _refine(rod: TwistedRod, path: _Path, data, a: TwistState, b: TwistState
     lam (from the chord between a and b)."""
     disc = data[0]
     lo, hi = (a, b) if a.unstable < b.unstable else (b, a)
-    bordering = rod.constraints + int(rod.symmetric and np.linalg.norm(
+    bordering = rod.constraints + int(path.phase(rod) and np.linalg.norm(
         lo.w[:2 * disc.free]) > 1e-10)
     q = lo.unstable + bordering
 
@@ -77,7 +77,7 @@ def _refine(rod: TwistedRod, path: _Path, data, a: TwistState, b: TwistState
         w = (1 - f) * a.w + f * b.w
         w[-1] = lam
         res, eig, vec, _ = _solve_program(disc.size, rod.constraints, path.keys,
-                                          rod.symmetric, data, jnp.asarray(w))
+                                          path.phase(rod), data, jnp.asarray(w))
         return res, float(eig[q]), np.asarray(vec[:, q]), lam
 
     found = {}
@@ -90,7 +90,7 @@ def _refine(rod: TwistedRod, path: _Path, data, a: TwistState, b: TwistState
     lam, _ = illinois(crossing, lo.w[-1], hi.w[-1], ftol=1e-12, xtol=1e-13)
     res, g, vec, lam = found[lam]
     eig_count = np.sum(np.asarray(_solve_program(
-        disc.size, rod.constraints, path.keys, rod.symmetric, data,
+        disc.size, rod.constraints, path.keys, path.phase(rod), data,
         jnp.asarray(np.append(np.asarray(res.x), lam)))[1]) < 0)
     state = _states(rod, path, data, np.append(np.asarray(res.x), lam)[None], [res.converged],
                     [res.residual_norm], [res.iterations], [eig_count])[0]

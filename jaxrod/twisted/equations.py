@@ -226,6 +226,10 @@ def _solve_at(size: int, count: int, keys: tuple, phase: bool, data, w0):
 _solve_program = jit(_solve_at, static_argnums=(0, 1, 2, 3))
 
 
+#: A load's inputs that scale it without turning it (``_Path.phase``).
+_STRENGTHS = ("load", "A", "G", "M")
+
+
 @dataclasses.dataclass(frozen=True)
 class _Path:
     """A straight path through the rod's inputs: each of ``keys`` at origin + span lam."""
@@ -251,5 +255,16 @@ class _Path:
 
     def lam(self, value: float) -> float:
         return (value - self.origin[0]) / self.span[0]
+
+    def phase(self, rod: TwistedRod) -> bool:
+        """Whether the phase condition is on along the whole path: a symmetric rod
+        (``TwistedRod.symmetric``) and a path that keeps it (the turns, the end's control,
+        the twist ratio, the load scale or a load's strength; a field's angle or the
+        bending ratio would break it part way, where a phase condition would force
+        states that are no equilibria)."""
+        keeps = ("turns", "tension", "shortening", "twist_ratio", "load_scale")
+        return rod.symmetric and all(
+            k in keeps or (k.count(".") == 1 and k.split(".")[1] in _STRENGTHS)
+            for k in self.keys)
 
 

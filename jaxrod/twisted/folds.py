@@ -58,13 +58,13 @@ def refine_fold(rod: TwistedRod, path: _Path, data, a: TwistState, b: TwistState
     """The fold between the branch's neighbours a and b (module docstring)."""
     disc = data[0]
     size, count = disc.size, rod.constraints
-    system = _TwistSystem(size, count, path.keys, rod.symmetric, data)
+    system = _TwistSystem(size, count, path.keys, path.phase(rod), data)
     chord = np.asarray(b.w) - np.asarray(a.w)
     normal = chord / np.sqrt(float(system.inner(chord, chord)))
     found = {}
 
     def at(sigma):
-        res, t_lam = _plane_program(size, count, path.keys, rod.symmetric, data,
+        res, t_lam = _plane_program(size, count, path.keys, path.phase(rod), data,
                                     jnp.asarray(a.w + sigma * chord), jnp.asarray(normal))
         found[sigma] = res
         return float(t_lam)
@@ -72,7 +72,7 @@ def refine_fold(rod: TwistedRod, path: _Path, data, a: TwistState, b: TwistState
     sigma, g = illinois(at, 0.0, 1.0, ftol=1e-12, xtol=1e-14)
     res = found[sigma]
     w = np.asarray(res.x)
-    solved, eig, _, _ = _solve_program(size, count, path.keys, rod.symmetric, data,
+    _, eig, _, _ = _solve_program(size, count, path.keys, path.phase(rod), data,
                                        jnp.asarray(w))
     state = _states(rod, path, data, w[None], [res.converged], [res.residual_norm],
                     [res.iterations], [np.sum(np.asarray(eig) < 0)])[0]

@@ -115,7 +115,7 @@ def _states(rod: TwistedRod, path: _Path, data, W, converged, residual, iteratio
                             fields)[:, -2:]).max(axis=(1, 2))
     orbit = np.linalg.norm(np.concatenate([W[:, :disc.free], W[:, disc.free:2 * disc.free]],
                                           axis=1), axis=1) > 1e-10
-    bordering = rod.constraints + (orbit & rod.symmetric)
+    bordering = rod.constraints + (orbit & path.phase(rod))
     states = []
     for i in range(len(W)):
         lam = float(W[i, -1])
