@@ -180,13 +180,13 @@ shortening = 0.03
 def test_the_assembled_linearisation_is_the_lagrangians_derivatives():
     """The branch's residual and Jacobian, assembled from the nodes' 6 x 6 Hessians, the
     far-end terms' 3 x 3 Hessian and the path's column by forward mode, equal autodiff of
-    the Lagrangian (the definition: energy with every kind of load, the far end's three
-    constraints, the phase condition on and pinned, a path through the turns and a field's
-    strength together) at a random point of an anisotropic rod, to round-off (1e-11
-    against entries of ~100)."""
+    the Lagrangian (the definition: energy with every kind of load and the centring, the
+    far end's three constraints, the phase condition on and pinned, a path through the
+    turns and a field's strength together) at a random point of an anisotropic rod, to
+    round-off (1e-13 of the largest entry)."""
     from jaxrod.twisted import equations
 
-    rod = _loaded_rod(twist_ratio=0.6, bending_ratio=1.3, shortening=0.1, n=8)
+    rod = _loaded_rod(twist_ratio=0.6, bending_ratio=1.3, shortening=0.1, n=8, centred=True)
     disc, k, keys = rod.discretisation(), rod.constraints, ("turns", "field.load")
     w = np.random.default_rng(1).normal(size=disc.size + k + 2) * 0.3
     x_ref, c, _ = equations._phase(jnp.asarray(w[:disc.size] + 0.1), disc, True)
@@ -199,8 +199,51 @@ def test_the_assembled_linearisation_is_the_lagrangians_derivatives():
         aux = (x_ref, c * on, jnp.asarray(on))
         R, J = assembled(w, aux, data, keys, k)
         R0, J0 = reference(w, aux, data, keys, k)
-        np.testing.assert_allclose(R, R0[:m], rtol=0, atol=1e-11)
-        np.testing.assert_allclose(J, J0[:m], rtol=0, atol=1e-11)
+        np.testing.assert_allclose(R, R0[:m], rtol=0, atol=1e-13 * np.max(np.abs(R0)))
+        np.testing.assert_allclose(J, J0[:m], rtol=0, atol=1e-13 * np.max(np.abs(J0)))
+
+
+def _localised_fold(gamma: float, shortening: float) -> tuple[float, float, float]:
+    """The localised helix's fold in the end rotation under shortening control, in the
+    long-rod limit (module docstring): with u = d^2 t / 16, m = (8 / d) sqrt(u (1 - u)) and
+    R = m / gamma + 4 arcsin(sqrt u), so dR/du = 0 at u = 1/2 + gamma d / 4: (turns, m, t)
+    there. Beyond it (u > 1/2 + gamma d / 4) R falls again: the branch turns back."""
+    d = shortening
+    u = 0.5 + gamma * d / 4.0
+    m = 8.0 / d * math.sqrt(u * (1.0 - u))
+    turns = (m / gamma + 4.0 * math.asin(math.sqrt(u))) / (2.0 * math.pi)
+    return turns, m, 16.0 * u / d**2
+
+
+@pytest.mark.slow
+def test_pyelastica_cases_fold_in_end_rotation_is_the_closed_forms():
+    """PyElastica's case turned on from 27 turns (3% shortening): the localised helix
+    tightens (k = sqrt(4 t - m^2) / 2 from 22 to 67) and stays stable to a fold at 36.676
+    turns, beyond which no nearby state exists and the branch turns back unstable. The
+    closed form (``_localised_fold``, exact for the long rod; the finite rod's difference
+    is of order exp(-k), 1e-29) gives the fold's turns, moment and tension; here at n = 96
+    on the grid gathered into a layer of width 0.015 at the middle, the slide held by the
+    centring (its stiffness exp(-67) of the others otherwise, below round-off): to 1e-10
+    (measured: 1e-14, 3e-14, 2e-12)."""
+    turns_f, m_f, t_f = _localised_fold(PYELASTICA_GAMMA, 0.03)
+    rod = TwistedRod(twist_ratio=PYELASTICA_GAMMA, shortening=0.03, n=48)
+    branch = twist_branch(rod, 27.0, ds_max=2.0)
+    start = twisted_equilibrium(rod, 27.0, start=branch.points[-2])
+    rod = TwistedRod(twist_ratio=PYELASTICA_GAMMA, shortening=0.03, n=96, layer_width=0.015,
+                     centred=True)
+    start = twisted_equilibrium(rod, 27.0, start=start)
+    branch = twist_branch(rod, 39.0, start=start, ds_max=0.5, max_folds=1)
+    assert len(branch.folds) == 1 and len(branch.fold_points) == 1
+    i = branch.folds[0]
+    before, after = branch.points[:i], branch.points[i:]
+    assert all(p.unstable == 0 and p.status.name == "SUCCESS" for p in before)
+    assert all(p.unstable == 1 for p in after if p.status.name == "SUCCESS")
+    fold = branch.fold_points[0]
+    assert fold.converged and fold.state.status.name == "SUCCESS"
+    assert abs(fold.value / turns_f - 1) <= 1e-10
+    assert abs(fold.state.twist_moment / m_f - 1) <= 1e-10
+    assert abs(fold.state.tension / t_f - 1) <= 1e-10
+    jax.clear_caches()
 
 
 def test_the_straight_rods_branch_points_are_the_greenhill_moments():

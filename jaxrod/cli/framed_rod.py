@@ -19,7 +19,7 @@ from jaxrod.status import Status
 #: (at 16 the path to PyElastica's case ends on another, unstable, state).
 PATH_DEGREE = 48
 #: The most the degree is raised to (doubling) until the state's Chebyshev tail is <= 1e-8.
-MOST_DEGREE = 384
+MOST_DEGREE = 256
 
 
 def twisted_rod(file, n: int):
@@ -38,8 +38,8 @@ def _resolved(rod, turns: float):
 
     state = twisted_equilibrium(rod, turns)
     n = rod.n
-    while state.converged and state.status == Status.UNDER_RESOLVED and 2 * n <= MOST_DEGREE:
-        n *= 2
+    while state.converged and state.status == Status.UNDER_RESOLVED and n < MOST_DEGREE:
+        n = min(2 * n, MOST_DEGREE)
         state = twisted_equilibrium(dataclasses.replace(rod, n=n), turns, start=state)
     return state
 

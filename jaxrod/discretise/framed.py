@@ -121,14 +121,16 @@ class FramedDiscretisation:
         return self.field.integrate(f_quad)
 
 
-def framed_discretisation(n: int, support: str = "clamped",
-                          quad_degree: int | None = None) -> FramedDiscretisation:
+def framed_discretisation(n: int, support: str = "clamped", quad_degree: int | None = None,
+                          layer_width: float | None = None) -> FramedDiscretisation:
     """Degree-n discretisation of the frame (n >= 4) for a support of ``FRAMED_SUPPORTS``;
-    ``quad_degree`` (default 2n + 2) the fine Clenshaw-Curtis grid's degree."""
+    ``quad_degree`` (default 2n + 2) the fine Clenshaw-Curtis grid's degree; ``layer_width``
+    gathers the grid about the middle (``jaxrod.discretise.grid_map``; None: the plain
+    grid)."""
     if support not in FRAMED_SUPPORTS:
         raise ParameterError(f"support: one of {', '.join(FRAMED_SUPPORTS)} for a framed rod, "
                              f"got {support!r}")
-    return FramedDiscretisation(field_discretisation(n, support, quad_degree))
+    return FramedDiscretisation(field_discretisation(n, support, quad_degree, layer_width))
 
 
 def twist_and_writhe(disc: FramedDiscretisation, x, turns=0.0) -> tuple[jax.Array, jax.Array]:

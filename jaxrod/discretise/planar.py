@@ -32,6 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod import spectral
+from jaxrod.discretise import grid_map
 from jaxrod.params import ParameterError, check_degree
 
 SUPPORTS = ("clamped", "pinned")
@@ -105,21 +106,24 @@ class PlanarDiscretisation:
 
 
 @lru_cache(maxsize=64)
-def _planar_arrays(n: int, support: str, quad_degree: int):
+def _planar_arrays(n: int, support: str, quad_degree: int, layer_width: float | None = None):
+    """The arrays on the Chebyshev grid in xi, mapped to s (``jaxrod.discretise.grid_map``;
+    the identity without a layer width): d/ds = (d/dxi) / s', ds = s' dxi."""
     nodes = spectral.chebyshev_nodes(n)
     quad_nodes = spectral.chebyshev_nodes(quad_degree)
     interp = spectral.interpolation_matrix(n, quad_nodes)
     diff = spectral.differentiation_matrix(n)
     # the free nodes: all, all but s = 0 (clamped), all but both ends (clamped-clamped)
     free = slice(0 if support == "pinned" else 1, n if support == "clamped-clamped" else n + 1)
+    quad_stretch = grid_map.stretch(quad_nodes, layer_width)
     return (
-        nodes,
-        quad_nodes,
-        spectral.clenshaw_curtis_weights(quad_degree),
+        grid_map.arclength(nodes, layer_width),
+        grid_map.arclength(quad_nodes, layer_width),
+        spectral.clenshaw_curtis_weights(quad_degree) * quad_stretch,
         interp[:, free],
-        (interp @ diff)[:, free],
+        (interp @ diff)[:, free] / quad_stretch[:, None],
         np.eye(n + 1)[:, free],
-        spectral.cumulative_integration_matrix(n),
+        spectral.cumulative_integration_matrix(n) * grid_map.stretch(nodes, layer_width),
     )
 
 
@@ -136,13 +140,14 @@ def planar_discretisation(n: int, support: str = "clamped",
     return field_discretisation(n, support, quad_degree)
 
 
-def field_discretisation(n: int, support: str,
-                         quad_degree: int | None = None) -> PlanarDiscretisation:
+def field_discretisation(n: int, support: str, quad_degree: int | None = None,
+                         layer_width: float | None = None) -> PlanarDiscretisation:
     """One scalar field on the degree-n grid with the ends that ``support`` holds at zero
     ("pinned": none, "clamped": s = 0, "clamped-clamped": both; the last for a framed
-    rod's fields, ``jaxrod.discretise.framed``)."""
+    rod's fields, ``jaxrod.discretise.framed``); ``layer_width``: the grid gathered about
+    the middle (``jaxrod.discretise.grid_map``)."""
     n = check_degree(n)
     m = 2 * int(n) + 2 if quad_degree is None else int(quad_degree)
-    arrays = _planar_arrays(int(n), support, m)
+    arrays = _planar_arrays(int(n), support, m, grid_map.check_layer_width(layer_width))
     # device_put, not jnp.asarray: the latter compiles a copy program per new shape
     return PlanarDiscretisation(int(n), support, *(jax.device_put(a) for a in arrays))

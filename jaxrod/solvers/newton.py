@@ -68,7 +68,7 @@ def _norm(v):
 
 def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args: Any = None, *,
            tol: float = 1e-12, xtol: float = 1e-10, max_steps: int = 50,
-           max_halvings: int = 12, stall_xtol: float = 1e-7,
+           max_halvings: int = 12, stall_xtol: float = 1e-7, floor_tol: float = 0.0,
            jacobian: Callable[[jax.Array, Any], jax.Array] | None = None,
            linearise: Callable[[jax.Array, Any], tuple[jax.Array, Any]] | None = None,
            solve: Callable[[Any, jax.Array], jax.Array] | None = None,
@@ -85,6 +85,9 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
       max_steps, max_halvings: static iteration budgets.
       stall_xtol: a step this small (relative) that cannot reduce |F| means |F| is at its
         round-off floor: accepted as converged.
+      floor_tol: where no step length reduces |F| and |F| <= floor_tol, |F| is taken to be
+        at its round-off floor whatever the step (a nearly singular direction, where the
+        floor's noise makes the step large): accepted as converged. 0 (default): never.
       jacobian: ``jacobian(x, args)`` = dF/dx, exact (assembled from the problem's
         structure); default ``jax.jacfwd`` of the residual.
       linearise: ``linearise(x, args)`` = (F, dF/dx) in one evaluation (where the two share
@@ -142,7 +145,8 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         # its round-off floor (|F| cannot be evaluated more accurately), so x is as accurate
         # as the arithmetic allows.
         exhausted = ~first & ~move & (s.t <= min_t)
-        at_floor = exhausted & (_norm(s.dx) <= stall_xtol * (1.0 + _norm(s.x)))
+        at_floor = exhausted & ((_norm(s.dx) <= stall_xtol * (1.0 + _norm(s.x)))
+                                | (s.fnorm <= floor_tol))
         new_direction = move & ~converged_here & (k < max_steps)
         # a new direction needs a move, so x is the trial point the Jacobian belongs to
         dx = jax.lax.cond(new_direction, lambda: solve(jac_at(), -ft),

@@ -14,13 +14,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxrod import spectral
+from jaxrod.discretise import grid_map
 from jaxrod.discretise.framed import FramedDiscretisation
 from jaxrod.params import ParameterError
 from jaxrod.solvers.arclength import StepControl
 from jaxrod.solvers.continuation import STATUS_MESSAGES
 from jaxrod.status import Status
 from jaxrod.twisted.branch_points import TwistBranchPoint, _refine
-from jaxrod.twisted.equations import _Path, _run_program, _solve_program
+from jaxrod.twisted.equations import FLOOR_TOL, _Path, _run_program, _solve_program
 from jaxrod.twisted.folds import refine_fold
 from jaxrod.twisted.rod import INPUTS, TwistedRod, _load_key
 from jaxrod.twisted.state import TwistState, _states
@@ -73,16 +74,17 @@ def _seed(rod: TwistedRod, disc: FramedDiscretisation, turns: float, lam: float
 
 
 def _regrid(rod: TwistedRod, state: TwistState, lam: float) -> np.ndarray:
-    """The start ``state`` on ``rod``'s grid (barycentric interpolation of each field), its
-    path parameter ``lam``."""
+    """The start ``state`` on ``rod``'s grid (barycentric interpolation of each field in
+    the old grid's coordinate, ``jaxrod.discretise.grid_map``), its path parameter
+    ``lam``."""
     old = state.rod
-    if old.n == rod.n:
+    if old.n == rod.n and old.layer_width == rod.layer_width:
         w = np.array(state.w)
     else:
         disc_old = old.discretisation()
         full = np.asarray(disc_old.field.to_full) @ state.x.reshape(3, -1).T
-        values = spectral.interpolation_matrix(old.n, np.asarray(
-            rod.discretisation().field.nodes)) @ full
+        values = spectral.interpolation_matrix(old.n, grid_map.grid_coordinate(
+            np.asarray(rod.discretisation().field.nodes), old.layer_width)) @ full
         x = values[1:1 + rod.free_values].T.ravel()
         w = np.concatenate([x, state.w[3 * old.free_values:]])
     if rod.constraints == 2 and old.constraints == 3:
@@ -119,7 +121,7 @@ def _follow(rod: TwistedRod, path: _Path, turns: float, w0, lam_to: float, orien
     disc = rod.discretisation()
     data = path.data(rod, turns, disc)
     lo, hi = sorted((float(w0[-1]), float(lam_to)))
-    control = StepControl(ds, ds_min, ds_max, 1.5, 1e-10, max_folds)
+    control = StepControl(ds, ds_min, ds_max, 1.5, FLOOR_TOL, max_folds)
     out = _run_program(disc.size, rod.constraints, path.keys, path.phase(rod), max_points,
                        data, jnp.asarray(w0), jnp.asarray(orient),
                        jnp.array([lo - 1e-12, hi + 1e-12]), control)

@@ -39,6 +39,7 @@ from jaxrod.twisted.rod import (
     INPUTS,
     MULTIPLIER_UNIT,
     TwistedRod,
+    centre_of_bending,
     density,
     endpoint,
     energy,
@@ -92,11 +93,12 @@ def _node_terms(w, data, keys: tuple, count: int):
     X = tip(x, turns, disc)
     grad_X = jax.grad(endpoint)(X, inputs, loads)
     hess_X = jax.hessian(endpoint)(X, inputs, loads)
+    pull = inputs[5] * centre_of_bending(x, turns, disc)  # the centring's dE/dH
 
     def phi(a, s):
         d3 = frame(a[0], a[1], a[2])[:, 2]
         return (density(a, s, inputs, loads) + MULTIPLIER_UNIT * jnp.dot(mu, d3[:count])
-                + jnp.dot(grad_X, d3))
+                + jnp.dot(grad_X, d3) + pull * (s - 0.5) * (a[0] ** 2 + a[1] ** 2))
 
     return jets, phi, hess_X, inputs
 
@@ -122,18 +124,22 @@ def _linearise(w, aux, data, keys: tuple, count: int):
     """(grad_z Lambda, [Hess_z Lambda | d grad_z Lambda / d lam]) assembled from the
     nodes: Lambda = sum_j q_j phi(a_j) + Psi(X) - U mu_z (1 - e) + nu c . (x - x_ref),
     the jets a_j = L_j x + l_j turns; the Hessian is sum_j q_j L_j^T phi_aa L_j + D^T
-    Psi_XX D (D = dX/dx), bordered by the constraints' gradients and c; the column is the
+    Psi_XX D (D = dX/dx) + sigma G G^T (the centring, G = dH/dx: ``TwistedRod.centred``),
+    bordered by the constraints' gradients and c; the column is the
     residual's derivative along the path (forward mode). The same numbers as autodiff of
     ``_lagrangian``, without its cost."""
     disc = data[0]
     _, c, on = aux
     L, q = disc.jet_matrix, disc.field.quad_weights
-    jets, phi, hess_X, _ = _node_terms(w, data, keys, count)
+    jets, phi, hess_X, inputs = _node_terms(w, data, keys, count)
     hess_a = jax.vmap(jax.hessian(phi))(jets, disc.quad_nodes)
     d3_a = jax.vmap(jax.jacfwd(lambda a: frame(a[0], a[1], a[2])[:, 2]))(jets)
     Lq = L * q[:, None, None]
     D = jnp.einsum("jrm,jkr->km", Lq, d3_a)
-    H_xx = jnp.einsum("jrm,jrs,jsn->mn", Lq, hess_a, L) + D.T @ hess_X @ D
+    turns = _apply(keys, data, w[-1])[0]
+    G = jax.grad(centre_of_bending)(w[:disc.size], turns, disc)
+    H_xx = (jnp.einsum("jrm,jrs,jsn->mn", Lq, hess_a, L) + D.T @ hess_X @ D
+            + inputs[5] * jnp.outer(G, G))
     H_xmu = MULTIPLIER_UNIT * D[:count].T
     R, column = jax.jvp(lambda lam: _residual(w.at[-1].set(lam), aux, data, keys, count),
                         (w[-1],), (jnp.ones_like(w[-1]),))
@@ -207,6 +213,13 @@ def _run(size: int, count: int, keys: tuple, phase: bool, capacity: int, data, w
 _run_program = jit(_run, static_argnums=(0, 1, 2, 3, 4))
 
 
+#: A residual that no step length reduces counts as converged at or below this, the
+#: continuation corrector's own tolerance: a localised state's slide along the rod is a
+#: nearly singular direction (its eigenvalue falls like exp(-k)), where the residual's
+#: round-off floor (about 1e-11 at t = 3000) makes Newton's step large but no better.
+FLOOR_TOL = 1e-10
+
+
 def _solve_at(size: int, count: int, keys: tuple, phase: bool, data, w0):
     """Newton on the stationarity at w0's path parameter, the phase at w0; the bordered
     Hessian's eigenvalues and eigenvectors at the solution."""
@@ -218,7 +231,7 @@ def _solve_at(size: int, count: int, keys: tuple, phase: bool, data, w0):
         return R, J[:, :m]
 
     res = newton(None, w0[:m], None, linearise=linearise, keep_jacobian=True,
-                 max_steps=60)
+                 max_steps=60, floor_tol=FLOOR_TOL)
     eig, vec = jnp.linalg.eigh(0.5 * (res.jacobian + res.jacobian.T))
     return res, eig, vec, _phase(res.x[:size], data[0], phase)[2]
 

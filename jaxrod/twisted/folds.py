@@ -20,7 +20,7 @@ from jaxrod.programs import jit
 from jaxrod.solvers.arclength import _corrector, unit_tangent
 from jaxrod.solvers.newton import newton
 from jaxrod.twisted.branch_points import illinois
-from jaxrod.twisted.equations import _Path, _phase, _solve_program, _TwistSystem
+from jaxrod.twisted.equations import FLOOR_TOL, _Path, _phase, _solve_program, _TwistSystem
 from jaxrod.twisted.rod import TwistedRod
 from jaxrod.twisted.state import TwistState, _states
 
@@ -31,7 +31,7 @@ def _on_plane(size: int, count: int, keys: tuple, phase: bool, data, w_pred, nor
     system = _TwistSystem(size, count, keys, phase, data)
     aux = _phase(w_pred[:size], data[0], phase)
     res = newton(None, w_pred, (system, w_pred, normal, aux, data), linearise=_corrector,
-                 keep_jacobian=True, max_steps=60)
+                 keep_jacobian=True, max_steps=60, floor_tol=FLOOR_TOL)
     t = unit_tangent(system, res.jacobian[:-1], normal)
     return res, t[-1]
 

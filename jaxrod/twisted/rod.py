@@ -40,11 +40,17 @@ from jaxrod.discretise.framed import (
     frame,
     framed_discretisation,
 )
+from jaxrod.discretise.grid_map import check_layer_width
 from jaxrod.params import ParameterError
 
 #: Multipliers are solved for in units of the clamped-clamped Euler load 4 pi^2 B1 / L^2, so
 #: that the continuation's inner product weighs them like the shape's values.
 MULTIPLIER_UNIT = 4.0 * math.pi**2
+
+#: The centring's stiffness (``TwistedRod.centred``): a slide by ds costs about
+#: CENTRING_STIFFNESS (ds int |v|^2)^2 / 2, of the order of the bending energy's own
+#: stiffness for a localised helix (int |v|^2 about 0.1).
+CENTRING_STIFFNESS = 1.0e4
 
 #: C / B1 of a circular section of Poisson ratio 1/2 (C / B = 1 / (1 + nu)).
 DEFAULT_TWIST_RATIO = 2.0 / 3.0
@@ -58,7 +64,16 @@ class TwistedRod:
       ``from_poisson_ratio``). bending_ratio: B2 / B1 > 0. Exactly one of ``tension`` (T L^2 /
       B1, a dead load along the axis; any sign) and ``shortening`` (the far end at
       (1 - shortening) L, 0 < shortening < 1). n: the Chebyshev degree of each of the three
-      fields (>= 8)."""
+      fields (>= 8). layer_width: None (the plain Chebyshev grid) or the width (in L) of a
+      layer at the middle that the grid gathers its nodes into
+      (``jaxrod.discretise.grid_map``): for states localised there, the localised helix of
+      width about 1 / k (k = sqrt(4 t - m^2) / 2). centred: hold a localised state's
+      centre at the middle (``centre_of_bending``), where its slide along the rod is a
+      direction of nearly zero stiffness (exp(-k) of the others), below the arithmetic's
+      resolution from k of about 25: the energy gains CENTRING_STIFFNESS H^2 / 2, zero with
+      its gradient on every state symmetric about the middle (the localised helix), so
+      those stay the rod's equilibria and the slide is counted stable; a state it would
+      move is reported not converged."""
 
     twist_ratio: float = DEFAULT_TWIST_RATIO
     bending_ratio: float = 1.0
@@ -68,8 +83,13 @@ class TwistedRod:
     loads: dict = dataclasses.field(default_factory=dict)
     support: str = "clamped-clamped"
     load_scale: float = 1.0
+    layer_width: float | None = None
+    centred: bool = False
 
     def __post_init__(self):
+        check_layer_width(self.layer_width)
+        if not isinstance(self.centred, bool):
+            raise ParameterError(f"centred: True or False, got {self.centred!r}")
         for name in ("twist_ratio", "bending_ratio"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
@@ -136,7 +156,8 @@ class TwistedRod:
         return self.n if self.support == "clamped" else self.n - 1
 
     def discretisation(self, n: int | None = None) -> FramedDiscretisation:
-        return framed_discretisation(self.n if n is None else n, self.support)
+        return framed_discretisation(self.n if n is None else n, self.support,
+                                     layer_width=self.layer_width)
 
     def replace(self, key: str, value: float) -> TwistedRod:
         """A copy with the input ``key`` (``INPUTS`` or a load's "term.field[.i]") set."""
@@ -155,9 +176,11 @@ class TwistedRod:
         return dataclasses.replace(self, loads=loads)
 
     def inputs(self) -> jax.Array:
-        """(gamma, beta, t, e): the traced inputs of ``lagrangian``."""
+        """(gamma, beta, t, e, load scale, centring stiffness): the traced inputs of the
+        energy."""
         return jnp.array([self.twist_ratio, self.bending_ratio, self.tension or 0.0,
-                          self.shortening or 0.0, self.load_scale])
+                          self.shortening or 0.0, self.load_scale,
+                          CENTRING_STIFFNESS if self.centred else 0.0])
 
 
 #: The rod's own inputs, by name, in the order of ``TwistedRod.inputs``.
@@ -233,12 +256,22 @@ def tip(x, turns, disc: FramedDiscretisation) -> jax.Array:
     return disc.integrate(d3.T)
 
 
+def centre_of_bending(x, turns, disc: FramedDiscretisation) -> jax.Array:
+    """H = int_0^1 (s - 1/2) (v1^2 + v2^2) ds, |v| the tangent's angle to the axis: zero on
+    every state symmetric about the middle (turned end over end, |v(s)| = |v(1 - s)|); a
+    slide by ds changes it by ds int |v|^2."""
+    a = disc.jets(x, turns)
+    return disc.integrate((disc.quad_nodes - 0.5) * (a[:, 0] ** 2 + a[:, 1] ** 2))
+
+
 def energy(x, turns, disc: FramedDiscretisation, inputs, loads: dict | None = None) -> jax.Array:
-    """E(x; turns) (module docstring) with the loads' terms."""
+    """E(x; turns) (module docstring) with the loads' terms, and the centring's
+    inputs[5] H^2 / 2 (``TwistedRod.centred``)."""
     loads = {} if loads is None else loads
     e = disc.integrate(jax.vmap(density, in_axes=(0, 0, None, None))(
         disc.jets(x, turns), disc.quad_nodes, inputs, loads))
-    return e + endpoint(tip(x, turns, disc), inputs, loads)
+    return (e + endpoint(tip(x, turns, disc), inputs, loads)
+            + 0.5 * inputs[5] * centre_of_bending(x, turns, disc) ** 2)
 
 
 def far_end(x, disc: FramedDiscretisation, inputs, count: int) -> jax.Array:

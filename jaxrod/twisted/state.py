@@ -15,8 +15,8 @@ from jaxrod.discretise.framed import twist_and_writhe
 from jaxrod.equilibria.resolution import TOLERANCE
 from jaxrod.programs import jit
 from jaxrod.status import Status
-from jaxrod.twisted.equations import _apply, _Path
-from jaxrod.twisted.rod import MULTIPLIER_UNIT, TwistedRod, energy
+from jaxrod.twisted.equations import FLOOR_TOL, _apply, _Path
+from jaxrod.twisted.rod import MULTIPLIER_UNIT, TwistedRod, centre_of_bending, energy
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,11 +87,14 @@ class TwistState:
 
 
 def _twist_measures(x, lam, keys: tuple, data):
-    """(twist moment, Tw, Wr, turns, tension under tension control) of one state."""
+    """(twist moment, Tw, Wr, turns, tension under tension control, the centring's force
+    on the state: the largest entry of sigma H dH/dx) of one state."""
     turns, inputs, loads = _apply(keys, data, lam)
     disc = data[0]
     moment = jax.grad(energy, argnums=1)(x, turns, disc, inputs, loads) / (2.0 * math.pi)
-    return (moment, *twist_and_writhe(disc, x, turns), turns, inputs[2])
+    H, G = jax.value_and_grad(centre_of_bending)(x, turns, disc)
+    return (moment, *twist_and_writhe(disc, x, turns), turns, inputs[2],
+            jnp.abs(inputs[5] * H) * jnp.max(jnp.abs(G)))
 
 
 _measures_program = jit(jax.vmap(_twist_measures, in_axes=(0, 0, None, None)),
@@ -106,8 +109,11 @@ def _states(rod: TwistedRod, path: _Path, data, W, converged, residual, iteratio
     W = np.atleast_2d(np.asarray(W))
     disc = data[0]
     size = disc.size
-    moment, tw, wr, turns, pull = (np.asarray(a) for a in _measures_program(
+    moment, tw, wr, turns, pull, held = (np.asarray(a) for a in _measures_program(
         jnp.asarray(W[:, :size]), jnp.asarray(W[:, -1]), path.keys, data))
+    # a state the centring holds away from the rod's own equilibrium is not one of them
+    residual = np.maximum(np.asarray(residual, float), held)
+    converged = np.asarray(converged, bool) & (held <= FLOOR_TOL)
     tension = -MULTIPLIER_UNIT * W[:, size + 2] if rod.constraints == 3 else pull
     fields = np.asarray(disc.field.to_full) @ W[:, :size].reshape(len(W), 3, disc.free) \
         .transpose(0, 2, 1)
