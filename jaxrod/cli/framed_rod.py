@@ -13,6 +13,9 @@ import json
 
 import numpy as np
 
+from jaxrod.cli._inputs import _float
+from jaxrod.equilibria.resolution import TOLERANCE
+from jaxrod.params import ParameterError
 from jaxrod.status import Status
 
 #: The path's degree where --n is not given: a localised helix of tens of turns needs it
@@ -22,13 +25,38 @@ PATH_DEGREE = 48
 MOST_DEGREE = 256
 
 
-def twisted_rod(file, n: int):
-    """The ``TwistedRod`` of a file's framed rod, at degree n."""
+def add_grid_options(p) -> None:
+    """--layer-width and --centred: the grid and the centring of a rod that carries its
+    frame (``jaxrod.twisted.TwistedRod``)."""
+    p.add_argument("--layer-width", type=_float("layer-width"), default=None,
+                   metavar="W", help="a rod that carries its frame: gather the grid into a "
+                   "layer of width W (in L, 0 < W <= 1) at the middle, for a state localised "
+                   "there (a localised helix: W about 2 / sqrt(4 t - m^2))")
+    p.add_argument("--centred", action="store_true",
+                   help="a rod that carries its frame: hold a localised state's centre at the "
+                   "middle (its slide along the rod, nearly free, counted stable)")
+
+
+def check_grid_options(args, file) -> None:
+    """ParameterError where the grid options come with a rod that carries no frame."""
+    for name, given in (("layer-width", getattr(args, "layer_width", None) is not None),
+                        ("centred", getattr(args, "centred", False))):
+        if given and file.framed is None:
+            raise ParameterError(f"{name}: only for a rod that carries its frame (support = "
+                                 "\"clamped-clamped\", or a 3D cantilever programmed at an "
+                                 "angle)")
+
+
+def twisted_rod(file, n: int, args=None):
+    """The ``TwistedRod`` of a file's framed rod, at degree n, on the grid and with the
+    centring that ``args`` ask for."""
     from jaxrod.twisted.rod import DEFAULT_TWIST_RATIO, TwistedRod
 
     h = file.framed
     return TwistedRod(DEFAULT_TWIST_RATIO if h.twist_ratio is None else h.twist_ratio,
-                      h.bending_ratio, h.tension, h.shortening, n, h.loads, h.support)
+                      h.bending_ratio, h.tension, h.shortening, n, h.loads, h.support,
+                      layer_width=getattr(args, "layer_width", None),
+                      centred=bool(getattr(args, "centred", False)))
 
 
 def _resolved(rod, turns: float):
@@ -61,7 +89,7 @@ def _fields(state, file) -> dict:
 
 
 def framed_equilibrium(args, file) -> int:
-    state = _resolved(twisted_rod(file, _degree(args)), file.framed.turns)
+    state = _resolved(twisted_rod(file, _degree(args), args), file.framed.turns)
     out = {"rig": args.rig, "set": args.set, **_fields(state, file)}
     if args.json:
         print(json.dumps(out))
@@ -83,23 +111,29 @@ def framed_equilibrium(args, file) -> int:
 def framed_branch(args, file, start: float, stop: float) -> int:
     """The branch along ``args.vary`` from ``start`` to ``stop`` (the file's units), from the
     file's equilibrium at ``start``."""
-    from jaxrod.twisted.branch import twist_branch
+    from jaxrod.twisted.branch import twist_branch, twisted_equilibrium
 
     key, factor = file.input_of(args.vary)
-    rod = twisted_rod(file, _degree(args))
+    rod = twisted_rod(file, _degree(args), args)
     if key == "turns":
         first = _resolved(rod, start)
     else:
         first = _resolved(rod.replace(key, start * factor), file.framed.turns)
     rod = first.rod
     branch = twist_branch(rod, stop * factor, vary=key, start=first)
-    values = branch.column("value") / factor
     tails = branch.column("tail")
+    # a branch resolved at its start but not along the way: again at twice the degree
+    while np.max(tails) > TOLERANCE and rod.n < MOST_DEGREE and first.converged:
+        rod = dataclasses.replace(rod, n=min(2 * rod.n, MOST_DEGREE))
+        first = twisted_equilibrium(rod, first.turns, start=first)
+        branch = twist_branch(rod, stop * factor, vary=key, start=first)
+        tails = branch.column("tail")
+    values = branch.column("value") / factor
     ok = all(p.converged for p in branch.points) and all(
         p.converged for p in branch.branch_points + branch.fold_points)
     status = (Status(branch.status) if not branch.complete and branch.status in
               {s.value for s in Status} else Status.NOT_CONVERGED if not ok or not
-              branch.complete else Status.UNDER_RESOLVED if np.max(tails) > 1e-8
+              branch.complete else Status.UNDER_RESOLVED if np.max(tails) > TOLERANCE
               else Status.SUCCESS)
 
     def point(state):

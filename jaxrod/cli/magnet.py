@@ -8,6 +8,7 @@ from pathlib import Path
 
 from jaxrod.cli._inputs import _entry, _float, _magnet_scene_from_args, _source, add_magnet_inputs
 from jaxrod.cli._output import _header, _not_converged, _output_dir
+from jaxrod.cli.framed_rod import add_grid_options
 from jaxrod.cli.rate_sweep import add_rate_sweep_options
 from jaxrod.cli.scene_file import (
     add_scene_file_inputs,
@@ -237,6 +238,7 @@ def add_branch(sub) -> None:
     b.add_argument("--modes", type=int, default=0, metavar="K",
                    help="scene file: the lowest K omega^2 of the vibration modes at every "
                    "point (0 at a fold: the snap's soft mode)")
+    add_grid_options(b)
     b.set_defaults(func=cmd_branch)
 
 

@@ -11,6 +11,7 @@ import json
 import numpy as np
 
 from jaxrod.cli._inputs import _degree, _float
+from jaxrod.cli.framed_rod import add_grid_options, check_grid_options
 from jaxrod.params import ParameterError
 from jaxrod.status import Status
 
@@ -46,7 +47,8 @@ def uses_scene_file(args, vary_is_file_key: bool = True) -> bool:
         return True
     given = [o for o, v in (("set", args.set), ("from", getattr(args, "start", None)),
                             ("vary", getattr(args, "vary", None) if vary_is_file_key
-                             else None)) if v]
+                             else None), ("layer-width", getattr(args, "layer_width", None)),
+                            ("centred", getattr(args, "centred", False))) if v]
     if given:
         raise ParameterError(f"{given[0]}: name a scene file first (jaxrod COMMAND RIG.toml "
                              "...)")
@@ -83,6 +85,7 @@ def cmd_equilibrium(args) -> int:
     from jaxrod.equilibria.resolution import resolved_equilibrium
 
     file = _load(args, framed=True)
+    check_grid_options(args, file)
     if file.framed is not None:
         from jaxrod.cli.framed_rod import framed_equilibrium
 
@@ -118,6 +121,7 @@ def branch_on_file(args) -> int:
                                  f"{resolvable(args.n)} modes (raise --n for more), got "
                                  f"{args.modes}")
     file = _load(args, framed=True)
+    check_grid_options(args, file)
     if file.framed is not None:
         from jaxrod.cli.framed_rod import framed_branch
 
@@ -271,6 +275,7 @@ def add_equilibrium(sub) -> None:
                    help="the first Chebyshev degree, 4-64 (default 16; 48 for a rod held at "
                    "both ends), raised until the state's Chebyshev tail is at most 1e-8 "
                    "rad (else under_resolved)")
+    add_grid_options(e)
     e.add_argument("--json", action="store_true", help="print one JSON object")
     e.set_defaults(func=cmd_equilibrium, n_fallback=16)
 
