@@ -10,7 +10,8 @@ from the axis is A / cosh(k (s - 1/2)). Both codes are compared on the end momen
 m = M L / B, the tension t = T L^2 / B (PyElastica's from its internal couple and force at
 the end elements; the moment's sign is the sense the example turns) and that envelope, and
 timed: jaxrod from a fresh program (compilation included) and warm, PyElastica as it runs
-its example.
+its example. jaxrod then turns on to the helix's fold in the end rotation, against the long-rod
+closed form of the fold (``fold_closed_form``).
 
 PyElastica is installed (pip) into ``benchmarks/.peers/pyelastica`` if missing
 (``pyelastica_peer.peer_python``).
@@ -121,6 +122,42 @@ def jaxrod_case(ref: dict, n: int) -> dict:
             "unstable": state.unstable, "converged": state.converged}
 
 
+def fold_closed_form(gamma: float, d: float) -> dict:
+    """The localised helix's fold in the end rotation at shortening d, long-rod limit: with
+    u = d^2 t / 16, m = (8 / d) sqrt(u (1 - u)) and R = m / gamma + 4 arcsin(sqrt u), so
+    dR/du = 0 at u = 1/2 + gamma d / 4."""
+    u = 0.5 + gamma * d / 4.0
+    m = 8.0 / d * math.sqrt(u * (1.0 - u))
+    return {"turns": (m / gamma + 4.0 * math.asin(math.sqrt(u))) / (2.0 * math.pi),
+            "twist_moment": m, "tension": 16.0 * u / d**2}
+
+
+def jaxrod_fold(n: int) -> dict:
+    """From 27 turns (reached as ``jaxrod_case`` does), turned on at n on the grid gathered
+    into a layer of width 0.015 at the middle, the slide centred, to the fold: the time of
+    the first call (programs compiled) and of a second (warm)."""
+    import jaxrod as jr
+
+    gamma = C / B
+    times = []
+    for _ in range(2):
+        start = time.perf_counter()
+        rod = jr.TwistedRod(twist_ratio=gamma, shortening=SHORTENING, n=48)
+        branch = jr.twist_branch(rod, TURNS, ds_max=2.0)
+        state = jr.twisted_equilibrium(rod, TURNS, start=branch.points[-2])
+        rod = jr.TwistedRod(twist_ratio=gamma, shortening=SHORTENING, n=n, layer_width=0.015,
+                            centred=True)
+        state = jr.twisted_equilibrium(rod, TURNS, start=state)
+        branch = jr.twist_branch(rod, 39.0, start=state, ds_max=0.5, max_folds=1)
+        times.append(time.perf_counter() - start)
+    fold = branch.fold_points[0]
+    return {"n": n, "seconds_first": times[0], "seconds_warm": times[1],
+            "turns": fold.value, "twist_moment": fold.state.twist_moment,
+            "tension": fold.state.tension, "converged": fold.converged,
+            "unstable_before": branch.points[branch.folds[0] - 1].unstable,
+            "unstable_after": branch.points[branch.folds[0] + 1].unstable}
+
+
 def pyelastica_case(python: str, n_elem: int, final_time: float, ref: dict) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         script = Path(tmp) / "case.py"
@@ -160,6 +197,21 @@ def _table(out: dict) -> str:
               f"warm | {pe['seconds']:.0f} s |",
               f"| time ratio (PyElastica / jaxrod's first call) | | | "
               f"{pe['seconds'] / jx['seconds_first']:.0f}x |", ""]
+    if "fold" in out:
+        f, fr = out["fold"], out["fold_reference"]
+        lines += ["The fold in the end rotation beyond 27 turns (3% shortening held): jaxrod "
+                  f"at n = {f['n']}, the grid gathered into a layer of width 0.015, the slide "
+                  "centred; an explicit simulation lands on one side of a fold and does not "
+                  "locate it.", "", "| | closed form (long rod) | jaxrod |", "|---|---|---|"]
+        for label, key, fmt in (("turns", "turns", ".10f"),
+                                ("end moment M L / B", "twist_moment", ".9f"),
+                                ("tension T L^2 / B", "tension", ".8f")):
+            lines.append(f"| {label} | {fr[key]:{fmt}} | {f[key]:{fmt}} "
+                         f"({_relative(f[key], fr[key]):.1e}) |")
+        lines += [f"| unstable directions before / after | | {f['unstable_before']} / "
+                  f"{f['unstable_after']} |",
+                  f"| time (from the Euler-buckled rod) | | {f['seconds_first']:.1f} s first "
+                  f"call, {f['seconds_warm']:.1f} s warm |", ""]
     return "\n".join(lines)
 
 
@@ -173,9 +225,12 @@ def main(argv=None) -> int:
     final_time = 525.0 if args.quick else 10500.0
     jx = jaxrod_case(ref, 96 if args.quick else 160)
     print(json.dumps(jx), flush=True)
+    fold = jaxrod_fold(96)
+    print(json.dumps(fold), flush=True)
     pe = pyelastica_case(peer_python(), 100, final_time, ref)
     print(json.dumps(pe), flush=True)
     out = {"reference": ref, "jaxrod": jx, "pyelastica": pe, "final_time": final_time,
+           "fold": fold, "fold_reference": fold_closed_form(C / B, SHORTENING),
            "machine": _machine()}
     dest = Path(args.out)
     dest.mkdir(parents=True, exist_ok=True)

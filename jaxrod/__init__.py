@@ -152,6 +152,8 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "TwistState": ("jaxrod.twisted.state", "TwistState"),
         "TwistBranchPoint": ("jaxrod.twisted.branch_points", "TwistBranchPoint"),
         "switch_branch": ("jaxrod.twisted.branch", "switch_branch"),
+        "twist_fold_curve": ("jaxrod.twisted.fold_curve", "twist_fold_curve"),
+        "TwistFoldCurve": ("jaxrod.twisted.fold_curve", "TwistFoldCurve"),
     },
     "Fold curves, the cusp and design maps": {
         "fold_curves": ("jaxrod.bistability.fold_curves", "fold_curves"),

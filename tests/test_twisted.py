@@ -224,7 +224,14 @@ def test_pyelastica_cases_fold_in_end_rotation_is_the_closed_forms():
     is of order exp(-k), 1e-29) gives the fold's turns, moment and tension; here at n = 96
     on the grid gathered into a layer of width 0.015 at the middle, the slide held by the
     centring (its stiffness exp(-67) of the others otherwise, below round-off): to 1e-10
-    (measured: 1e-14, 3e-14, 2e-12)."""
+    (measured: 1e-14, 3e-14, 2e-12). The fold curve in (rotation, shortening), traced
+    across the turns from this branch (``twist_fold_curve``: at 34 and 28 turns the fold
+    in the shortening): the closed form's d with R(d) = those turns, and t = 8 / d^2 +
+    4 gamma / d there (u = 1/2 + gamma d / 4), to 1e-10 (measured 3e-14)."""
+    from scipy.optimize import brentq
+
+    from jaxrod.twisted.fold_curve import twist_fold_curve
+
     turns_f, m_f, t_f = _localised_fold(PYELASTICA_GAMMA, 0.03)
     rod = TwistedRod(twist_ratio=PYELASTICA_GAMMA, shortening=0.03, n=48)
     branch = twist_branch(rod, 27.0, ds_max=2.0)
@@ -243,6 +250,13 @@ def test_pyelastica_cases_fold_in_end_rotation_is_the_closed_forms():
     assert abs(fold.value / turns_f - 1) <= 1e-10
     assert abs(fold.state.twist_moment / m_f - 1) <= 1e-10
     assert abs(fold.state.tension / t_f - 1) <= 1e-10
+    curve = twist_fold_curve(branch, [34.0, 28.0], "shortening", 0.08, ds_max=0.5)
+    assert curve.complete
+    for turns, d, t in zip(curve.turns, curve.column("value"), curve.column("tension")):
+        d_ref = brentq(lambda e: _localised_fold(PYELASTICA_GAMMA, e)[0] - turns, 0.02, 0.2,
+                       xtol=1e-15)
+        assert abs(d / d_ref - 1) <= 1e-10
+        assert abs(t / (8.0 / d_ref**2 + 4.0 * PYELASTICA_GAMMA / d_ref) - 1) <= 1e-10
     jax.clear_caches()
 
 

@@ -111,9 +111,11 @@ def _states(rod: TwistedRod, path: _Path, data, W, converged, residual, iteratio
     size = disc.size
     moment, tw, wr, turns, pull, held = (np.asarray(a) for a in _measures_program(
         jnp.asarray(W[:, :size]), jnp.asarray(W[:, -1]), path.keys, data))
-    # a state the centring holds away from the rod's own equilibrium is not one of them
-    residual = np.maximum(np.asarray(residual, float), held)
-    converged = np.asarray(converged, bool) & (held <= FLOOR_TOL)
+    # a state the centring or the phase condition holds away from the rod's own
+    # equilibrium (their forces sigma H dH/dx and nu c, c a unit vector) is not one of them
+    off = np.maximum(held, np.abs(W[:, size + rod.constraints]))
+    residual = np.maximum(np.asarray(residual, float), off)
+    converged = np.asarray(converged, bool) & (off <= FLOOR_TOL)
     tension = -MULTIPLIER_UNIT * W[:, size + 2] if rod.constraints == 3 else pull
     fields = np.asarray(disc.field.to_full) @ W[:, :size].reshape(len(W), 3, disc.free) \
         .transpose(0, 2, 1)
