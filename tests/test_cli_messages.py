@@ -6,6 +6,7 @@ version and public names."""
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from command_line import run_cli
@@ -27,6 +28,10 @@ from jaxrod.cli import main
      "prior remanence: remanence is not free"),
     (["fit", "--angles", "-25", "38", "24", "-42", "--free", "E,remanence", "--prior",
       "remanence=8e5:-4e4"], "prior remanence: prior sd"),
+    (["equilibrium", str(Path(jr.__file__).parent / "rigs" / "hard-magnetic-cantilever.toml"),
+      "--centred"],
+     "centred: only for a rod that carries its frame"),
+    (["branch", "--layer-width", "0.1"], "layer-width: name a scene file first"),
 ])
 def test_one_line_that_names_the_problem(argv, says):
     proc = run_cli(*argv)

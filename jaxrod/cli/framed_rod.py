@@ -65,11 +65,11 @@ def _resolved(rod, turns: float):
     from jaxrod.twisted.branch import twisted_equilibrium
 
     state = twisted_equilibrium(rod, turns)
-    n = rod.n
+    path_tail, n = state.path_tail, rod.n
     while state.converged and state.status == Status.UNDER_RESOLVED and n < MOST_DEGREE:
         n = min(2 * n, MOST_DEGREE)
         state = twisted_equilibrium(dataclasses.replace(rod, n=n), turns, start=state)
-    return state
+    return dataclasses.replace(state, path_tail=path_tail)
 
 
 def _degree(args) -> int:
@@ -84,8 +84,18 @@ def _fields(state, file) -> dict:
                tip_tangent_deg=float(np.degrees(np.arctan2(tangent[0], tangent[2]))),
                tip_position=[float(v) * file.length for v in X],
                stable=state.unstable == 0, residual_norm=state.residual,
-               error_estimate=state.tail, message=state.status.message)
+               error_estimate=state.tail, path_error_estimate=state.path_tail,
+               message=state.status.message)
     return out
+
+
+def _path_warning(state) -> str:
+    """A line where the path that reached the state was under-resolved, else empty."""
+    if not state.path_tail > TOLERANCE:
+        return ""
+    return (f"\n  the path to it was under-resolved (Chebyshev tail up to {state.path_tail:.1e} "
+            "on its grid): it may have reached another equilibrium than a resolved path "
+            "would; raise --n or give --layer-width")
 
 
 def framed_equilibrium(args, file) -> int:
@@ -98,13 +108,15 @@ def framed_equilibrium(args, file) -> int:
               f"{out['tip_tangent_deg']:.10f} deg, tip at "
               f"({', '.join(f'{v:.6g}' for v in out['tip_position'])}); "
               f"{'stable' if state.unstable == 0 else f'{state.unstable} unstable'}; "
-              f"{out['message']} (n = {state.rod.n}, Chebyshev tail {state.tail:.1e})")
+              f"{out['message']} (n = {state.rod.n}, Chebyshev tail {state.tail:.1e})"
+              + _path_warning(state))
     else:
         print(f"{args.rig}: {state.turns:.10g} turns, twisting moment M L/B = "
               f"{state.twist_moment:.10g}, tension T L^2/B = {state.tension:.10g}; Tw "
               f"{state.twist:.6g}, Wr {state.writhe:.6g}; "
               f"{'stable' if state.unstable == 0 else f'{state.unstable} unstable'}; "
-              f"{out['message']} (n = {state.rod.n}, Chebyshev tail {state.tail:.1e})")
+              f"{out['message']} (n = {state.rod.n}, Chebyshev tail {state.tail:.1e})"
+              + _path_warning(state))
     return 0 if state.status == Status.SUCCESS else 1
 
 

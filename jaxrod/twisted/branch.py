@@ -200,12 +200,14 @@ def twisted_equilibrium(rod: TwistedRod, turns: float, *, start: TwistState | No
     helical buckling case); under tension control by turning the straight rod; with a free
     end (turns 0) by raising the loads from the straight rod (the load scale). With a
     ``start``, by turning its far end from there (``twist_branch``; its ``options``), or at
-    the same turns (another n, say) by Newton alone."""
+    the same turns (another n, say) by Newton alone. The state's ``path_tail`` is the
+    largest Chebyshev tail along the path that reached it."""
     if not math.isfinite(turns):
         raise ParameterError(f"turns: a finite number, got {turns!r}")
     if rod.control == "free" and turns != 0.0:
         raise ParameterError("turns: a rod with a free end has no far clamp to turn (0)")
     disc = rod.discretisation()
+    path_tail = 0.0  # Newton alone: no path
     if start is not None and abs(start.turns - turns) <= 1e-12:
         path = _Path(("turns",), (0.0,), (1.0,))
         w = _regrid(rod, start, turns)
@@ -238,6 +240,7 @@ def twisted_equilibrium(rod: TwistedRod, turns: float, *, start: TwistState | No
         if not len(past):
             raise _not_reached(branch, turns)
         i = int(past[0])
+        path_tail = max(p.tail for p in branch.points[:i + 1])
         a, b = branch.points[i - 1], branch.points[i]
         f = (lam - a.w[-1]) / (b.w[-1] - a.w[-1])
         w = (1 - f) * a.w + f * b.w
@@ -246,8 +249,9 @@ def twisted_equilibrium(rod: TwistedRod, turns: float, *, start: TwistState | No
     res, eig, _, _ = _solve_program(disc.size, rod.constraints, path.keys, path.phase(rod),
                                     data, jnp.asarray(w))
     full = np.append(np.asarray(res.x), lam)
-    return _states(rod, path, data, full, [res.converged], [res.residual_norm],
-                   [res.iterations], [np.sum(np.asarray(eig) < 0)])[0]
+    state = _states(rod, path, data, full, [res.converged], [res.residual_norm],
+                    [res.iterations], [np.sum(np.asarray(eig) < 0)])[0]
+    return dataclasses.replace(state, path_tail=float(path_tail))
 
 
 def _not_reached(branch: TwistBranch, turns: float) -> Exception:

@@ -27,7 +27,10 @@ class TwistState:
     tension: T L^2 / B1 there; twist, writhe: Tw and Wr (their sum is ``turns``, the
     linking number); unstable: how many directions lower the energy (0: stable);
     converged, residual, iterations: Newton's report; tail: the largest of the three
-    fields' last two Chebyshev coefficients (the resolution: small against the fields)."""
+    fields' last two Chebyshev coefficients (the resolution: small against the fields);
+    path_tail: for ``twisted_equilibrium``, the largest tail along the path that reached it
+    (0 for Newton alone; above ``TOLERANCE`` the path was under-resolved and may have
+    reached another equilibrium than a resolved path would)."""
 
     rod: TwistedRod
     w: np.ndarray
@@ -42,6 +45,7 @@ class TwistState:
     iterations: int
     tail: float
     value: float = float("nan")
+    path_tail: float = float("nan")
 
     @property
     def x(self) -> np.ndarray:
