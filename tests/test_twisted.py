@@ -461,3 +461,41 @@ def test_the_phase_condition_is_on_only_where_the_whole_path_keeps_the_symmetry(
                      (("bending_ratio",), False)):
         path = _Path(keys, (0.0,) * len(keys), (1.0,) * len(keys))
         assert path.phase(axial) == on and not path.phase(across)
+
+
+@pytest.mark.slow
+def test_a_field_out_of_the_plane_by_its_azimuth(tmp_path):
+    """``[[field]] azimuth_deg`` in 3D (``jaxrod equilibrium RIG --json``): the cantilever
+    magnetised along its tangent in the field at 90 degrees turned to azimuth 60 has its tip
+    where the field at azimuth 0 puts it, turned by 60 degrees about z (the rod's symmetry;
+    to 1e-12); programmed at 30 degrees to its tangent (a rod that carries its frame), the
+    field at 90 degrees and azimuth 180 is the field at -90 degrees (the same state, to
+    1e-12). A planar rod refuses an azimuth, naming the key."""
+    import json
+
+    from command_line import run_cli
+    from test_scene_files import CANTILEVER
+
+    def tip(azimuth, angle=90.0, programmed=False):
+        text = "geometry = \"3d\"\n" + CANTILEVER.replace(
+            "angle_deg = 90          # from +z toward +x",
+            f"angle_deg = {angle}\nazimuth_deg = {azimuth}")
+        if programmed:
+            text = text.replace("remanence = 1.0e5", "remanence = 1.0e5\nangle_deg = 30.0")
+        path = tmp_path / "rig.toml"
+        path.write_text(text)
+        proc = run_cli("equilibrium", path, "--json")
+        assert proc.returncode == 0, proc.stderr
+        return np.array(json.loads(proc.stdout)["tip_position"])
+
+    turned, c = tip(60.0), math.radians(60.0)
+    rotation = np.array([[math.cos(c), -math.sin(c), 0.0], [math.sin(c), math.cos(c), 0.0],
+                         [0.0, 0.0, 1.0]])
+    np.testing.assert_allclose(turned, rotation @ tip(0.0), rtol=0, atol=1e-12 * 0.05)
+    np.testing.assert_allclose(tip(180.0, programmed=True), tip(0.0, -90.0, programmed=True),
+                               rtol=0, atol=1e-12 * 0.05)
+    (tmp_path / "planar.toml").write_text(CANTILEVER.replace(
+        "angle_deg = 90          # from +z toward +x", "angle_deg = 90\nazimuth_deg = 10"))
+    proc = run_cli("equilibrium", tmp_path / "planar.toml")
+    assert proc.returncode == 2 and "field.0.azimuth_deg" in proc.stderr
+    jax.clear_caches()

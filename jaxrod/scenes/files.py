@@ -89,8 +89,8 @@ TABLES = {
     "gravity": {"si": ("g", "hanging"), "nondimensional": ("G", "hanging")},
 }
 FIELD_KEYS = {
-    "uniform": {"si": ("kind", "B", "angle_deg"),
-                "nondimensional": ("kind", "load", "A", "angle_deg")},
+    "uniform": {"si": ("kind", "B", "angle_deg", "azimuth_deg"),
+                "nondimensional": ("kind", "load", "A", "angle_deg", "azimuth_deg")},
     "dipole": {"si": ("kind", "moment", "remanence", "diameter", "position",
                       "moment_direction", "path", "radius", "angle_deg", "rail", "along",
                       "coefficients", "t", "moment_along_path"),
@@ -308,22 +308,29 @@ def scene_from(data: dict) -> FileScene:
         name = f"field{i}"
         angle = math.radians(number(field, "angle_deg", where, required=False, default=0.0))
         if fkind == "uniform":
+            azimuth = math.radians(number(field, "azimuth_deg", where, required=False,
+                                          default=0.0))
+            if azimuth != 0.0 and geometry != "3d":
+                fail(f"{where}azimuth_deg", "a planar rod's field lies in its plane (x-z); "
+                                            "geometry = \"3d\" for a field out of it")
             if not si and "A" in field:
                 if kind != "soft":
                     fail(f"{where}A", "the anisotropy group is the soft wire's "
                                        "(magnetisation.kind = \"soft\")")
-                terms[name] = Anisotropy(number(field, "A", where), direction(angle))
+                axis = direction(angle)
+                terms[name] = Anisotropy(number(field, "A", where), np.array(
+                    [axis[0] * math.cos(azimuth), axis[0] * math.sin(azimuth), axis[2]]))
                 inputs[f"{where}A"] = (f"{name}.A", 1.0)
                 continue
             per_b = area * magnetisation * L**2 / bending if si else 1.0
             load = per_b * number(field, "B" if si else "load", where)
             inputs[f"{where}{'B' if si else 'load'}"] = (f"{name}.load", per_b)
             if profile is None and strength is None:
-                terms[name] = Zeeman(load, angle)
+                terms[name] = Zeeman(load, angle, azimuth)
             else:
                 terms[name] = ProgrammedMagnetisation(
                     load, angle, np.zeros(1) if profile is None else profile,
-                    np.ones(1) if strength is None else strength)
+                    np.ones(1) if strength is None else strength, azimuth)
                 if profile is not None and len(profile) == 1 and len(fields) == 1:
                     inputs["magnetisation.angle_deg"] = (f"{name}.profile.0", math.pi / 180.0)
                 if strength is not None and len(fields) == 1:
@@ -331,6 +338,8 @@ def scene_from(data: dict) -> FileScene:
                         inputs[f"magnetisation.strength_profile.{k}"] = (
                             f"{name}.strength.{k}", 1.0)
             inputs[f"{where}angle_deg"] = (f"{name}.angle", math.pi / 180.0)
+            if geometry == "3d" and not isinstance(terms[name], Anisotropy):
+                inputs[f"{where}azimuth_deg"] = (f"{name}.azimuth", math.pi / 180.0)
             continue
         if profile is not None and field.get("path") in ("circle", "curve"):
             fail("magnetisation.angle_deg" if "angle_deg" in mag else

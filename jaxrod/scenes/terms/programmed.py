@@ -30,8 +30,10 @@ from jaxrod.spectral import chebyshev_series
 @term("programmed")
 class ProgrammedMagnetisation:
     """load, the field's angle a from +z toward +x (radians), the magnetisation's angle to
-    the tangent as polynomial coefficients in s (radians; [phi] for a constant angle), and
-    its strength relative to the load as Chebyshev coefficients in 2 s - 1 ([1]: uniform)."""
+    the tangent as polynomial coefficients in s (radians; [phi] for a constant angle), its
+    strength relative to the load as Chebyshev coefficients in 2 s - 1 ([1]: uniform), and
+    the field's azimuth c about +z from +x (radians; a rod that carries its frame only: the
+    planar rod's field lies in its plane, c = 0)."""
 
     planar_only = True  # not a field: the 3D rod's chart carries no d1
 
@@ -39,6 +41,7 @@ class ProgrammedMagnetisation:
     angle: jax.Array | float = 0.0
     profile: jax.Array = dataclasses.field(default_factory=lambda: jnp.zeros(1))
     strength: jax.Array = dataclasses.field(default_factory=lambda: jnp.ones(1))
+    azimuth: jax.Array | float = 0.0
 
     def phi(self, s):
         """phi(s) = sum_k c_k s^k."""
@@ -55,11 +58,12 @@ class ProgrammedMagnetisation:
     def framed(self, F, dF, s):
         """-load mu(s) b . (cos(phi) d3 + sin(phi) d1) on a rod that carries its frame
         F = (d1, d2, d3) (``jaxrod.twisted``): the remanence in the material plane (d1, d3),
-        b = (sin a, 0, cos a). In the plane (d1 = (cos theta, 0, -sin theta)) it is
-        ``planar``."""
+        b = (sin a cos c, sin a sin c, cos a). In the plane (c = 0, d1 = (cos theta, 0,
+        -sin theta)) it is ``planar``."""
         phi = self.phi(s)
         m = jnp.cos(phi) * F[:, 2] + jnp.sin(phi) * F[:, 0]
-        b = jnp.stack([jnp.sin(self.angle), jnp.zeros_like(self.angle), jnp.cos(self.angle)])
+        b = jnp.stack([jnp.sin(self.angle) * jnp.cos(self.azimuth),
+                       jnp.sin(self.angle) * jnp.sin(self.azimuth), jnp.cos(self.angle)])
         return -self.load * self.mu(s) * jnp.dot(b, m)
 
     def density(self, d3, dd3, s):
