@@ -97,26 +97,39 @@ def envelope_error(s, radius, ref) -> float:
     return float(np.max(np.abs(np.asarray(radius) - expected)) / ref["amplitude"])
 
 
-def jaxrod_case(ref: dict, n: int) -> dict:
-    """Turn the Euler-buckled rod to 27 turns at n = 48, then solve at n: the time of the
-    first call (programs compiled) and of a second (warm)."""
+def _reached(target):
+    """PyElastica's state on ``target`` (a TwistedRod): the Euler-buckled rod turned to 27
+    turns at n = 48, then solved on the target's grid."""
     import jaxrod as jr
-    from jaxrod import spectral
 
-    gamma = C / B
+    rod = jr.TwistedRod(twist_ratio=C / B, shortening=SHORTENING, n=48)
+    branch = jr.twist_branch(rod, TURNS, ds_max=2.0)
+    state = jr.twisted_equilibrium(rod, TURNS, start=branch.points[-2])
+    return jr.twisted_equilibrium(target, TURNS, start=state)
+
+
+def _twice(run):
+    """(run()'s result, the seconds of its first call (programs compiled) and of a second
+    (warm))."""
     times = []
     for _ in range(2):
         start = time.perf_counter()
-        rod = jr.TwistedRod(twist_ratio=gamma, shortening=SHORTENING, n=48)
-        branch = jr.twist_branch(rod, TURNS, ds_max=2.0)
-        state = jr.twisted_equilibrium(rod, TURNS, start=branch.points[-2])
-        state = jr.twisted_equilibrium(jr.TwistedRod(twist_ratio=gamma, shortening=SHORTENING,
-                                                     n=n), TURNS, start=state)
+        result = run()
         times.append(time.perf_counter() - start)
+    return result, times[0], times[1]
+
+
+def jaxrod_case(ref: dict, n: int) -> dict:
+    """Turn the Euler-buckled rod to 27 turns at n = 48, then solve at n, timed."""
+    import jaxrod as jr
+    from jaxrod import spectral
+
+    state, first, warm = _twice(lambda: _reached(
+        jr.TwistedRod(twist_ratio=C / B, shortening=SHORTENING, n=n)))
     s, r = state.centreline()
     fine = np.linspace(0.0, 1.0, 401)
     xy = spectral.interpolation_matrix(len(s) - 1, fine) @ r[:, :2]
-    return {"n": n, "seconds_first": times[0], "seconds_warm": times[1],
+    return {"n": n, "seconds_first": first, "seconds_warm": warm,
             "twist_moment": state.twist_moment, "tension": state.tension,
             "envelope_error": envelope_error(fine, np.hypot(xy[:, 0], xy[:, 1]), ref),
             "unstable": state.unstable, "converged": state.converged}
@@ -134,28 +147,19 @@ def fold_closed_form(gamma: float, d: float) -> dict:
 
 def jaxrod_fold(n: int) -> dict:
     """From 27 turns (reached as ``jaxrod_case`` does), turned on at n on the grid gathered
-    into a layer of width 0.015 at the middle, the slide centred, to the fold: the time of
-    the first call (programs compiled) and of a second (warm)."""
+    into a layer of width 0.015 at the middle, the slide centred, to the fold, timed."""
     import jaxrod as jr
 
-    gamma = C / B
-    times = []
-    for _ in range(2):
-        start = time.perf_counter()
-        rod = jr.TwistedRod(twist_ratio=gamma, shortening=SHORTENING, n=48)
-        branch = jr.twist_branch(rod, TURNS, ds_max=2.0)
-        state = jr.twisted_equilibrium(rod, TURNS, start=branch.points[-2])
-        rod = jr.TwistedRod(twist_ratio=gamma, shortening=SHORTENING, n=n, layer_width=0.015,
-                            centred=True)
-        state = jr.twisted_equilibrium(rod, TURNS, start=state)
-        branch = jr.twist_branch(rod, 39.0, start=state, ds_max=0.5, max_folds=1)
-        times.append(time.perf_counter() - start)
-    fold = branch.fold_points[0]
-    return {"n": n, "seconds_first": times[0], "seconds_warm": times[1],
+    rod = jr.TwistedRod(twist_ratio=C / B, shortening=SHORTENING, n=n, layer_width=0.015,
+                        centred=True)
+    branch, first, warm = _twice(lambda: jr.twist_branch(
+        rod, 39.0, start=_reached(rod), ds_max=0.5, max_folds=1))
+    fold, i = branch.fold_points[0], branch.folds[0]
+    return {"n": n, "seconds_first": first, "seconds_warm": warm,
             "turns": fold.value, "twist_moment": fold.state.twist_moment,
             "tension": fold.state.tension, "converged": fold.converged,
-            "unstable_before": branch.points[branch.folds[0] - 1].unstable,
-            "unstable_after": branch.points[branch.folds[0] + 1].unstable}
+            "unstable_before": branch.points[i - 1].unstable,
+            "unstable_after": branch.points[i + 1].unstable}
 
 
 def pyelastica_case(python: str, n_elem: int, final_time: float, ref: dict) -> dict:
