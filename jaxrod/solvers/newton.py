@@ -145,8 +145,9 @@ def newton(residual: Callable[[jax.Array, Any], jax.Array], x0: jax.Array, args:
         # its round-off floor (|F| cannot be evaluated more accurately), so x is as accurate
         # as the arithmetic allows.
         exhausted = ~first & ~move & (s.t <= min_t)
-        at_floor = exhausted & ((_norm(s.dx) <= stall_xtol * (1.0 + _norm(s.x)))
-                                | (s.fnorm <= floor_tol))
+        at_floor = exhausted & (_norm(s.dx) <= stall_xtol * (1.0 + _norm(s.x)))
+        if floor_tol > 0.0:  # (a Python branch: without it the program is unchanged)
+            at_floor = at_floor | (exhausted & (s.fnorm <= floor_tol))
         new_direction = move & ~converged_here & (k < max_steps)
         # a new direction needs a move, so x is the trial point the Jacobian belongs to
         dx = jax.lax.cond(new_direction, lambda: solve(jac_at(), -ft),
