@@ -159,7 +159,7 @@ def jaxrod_fold(n: int) -> dict:
             "turns": fold.value, "twist_moment": fold.state.twist_moment,
             "tension": fold.state.tension, "converged": fold.converged,
             "unstable_before": branch.points[i - 1].unstable,
-            "unstable_after": branch.points[i + 1].unstable}
+            "unstable_after": branch.points[i].unstable}
 
 
 def pyelastica_case(python: str, n_elem: int, final_time: float, ref: dict) -> dict:

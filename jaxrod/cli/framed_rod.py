@@ -14,7 +14,6 @@ import json
 import numpy as np
 
 from jaxrod.cli._inputs import _float
-from jaxrod.equilibria.resolution import TOLERANCE
 from jaxrod.params import ParameterError
 from jaxrod.status import Status
 
@@ -91,6 +90,8 @@ def _fields(state, file) -> dict:
 
 def _path_warning(state) -> str:
     """A line where the path that reached the state was under-resolved, else empty."""
+    from jaxrod.equilibria.resolution import TOLERANCE
+
     if not state.path_tail > TOLERANCE:
         return ""
     return (f"\n  the path to it was under-resolved (Chebyshev tail up to {state.path_tail:.1e} "
@@ -123,6 +124,7 @@ def framed_equilibrium(args, file) -> int:
 def framed_branch(args, file, start: float, stop: float) -> int:
     """The branch along ``args.vary`` from ``start`` to ``stop`` (the file's units), from the
     file's equilibrium at ``start``."""
+    from jaxrod.equilibria.resolution import TOLERANCE
     from jaxrod.twisted.branch import twist_branch, twisted_equilibrium
 
     key, factor = file.input_of(args.vary)
