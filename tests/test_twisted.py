@@ -133,6 +133,38 @@ def test_pyelastica_helical_buckling_state_is_the_localised_helix():
     jax.clear_caches()
 
 
+@pytest.mark.slow
+def test_the_fold_from_the_command_line(tmp_path):
+    """PyElastica's case as a scene file, ``jaxrod branch --vary ends.rotation_turns --from 27
+    --to 39 --layer-width 0.015 --centred --max-folds 1 --json``: the branch ends at its
+    first fold, refined and reported in turns, the closed form's (``_localised_fold``) to
+    1e-10, with its moment and tension; the run is complete and resolved."""
+    import json
+
+    from command_line import run_cli
+
+    rig = tmp_path / "helical.toml"
+    rig.write_text(f"""units = "nondimensional"
+geometry = "3d"
+[rod]
+support = "clamped-clamped"
+twist_ratio = {PYELASTICA_GAMMA!r}
+[ends]
+rotation_turns = 27.0
+shortening = 0.03
+""")
+    proc = run_cli("branch", rig, "--vary", "ends.rotation_turns", "--from", "27", "--to",
+                   "39", "--layer-width", "0.015", "--centred", "--max-folds", "1", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["status"] == "success" and out["complete"] and len(out["folds"]) == 1
+    fold = out["folds"][0]
+    for key, reference in zip(("value", "twist_moment", "tension"),
+                              _localised_fold(PYELASTICA_GAMMA, 0.03)):
+        assert abs(fold[key] / reference - 1) <= 1e-10
+    jax.clear_caches()
+
+
 def _loaded_rod(**kwargs) -> TwistedRod:
     """A rod under every kind of load the framed rod takes: gravity off the axis, a soft
     wire's anisotropy, a programmed remanence in a tilted field, a magnet at the far end."""

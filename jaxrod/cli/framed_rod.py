@@ -24,9 +24,9 @@ PATH_DEGREE = 48
 MOST_DEGREE = 256
 
 
-def add_grid_options(p) -> None:
+def add_grid_options(p, branch: bool = False) -> None:
     """--layer-width and --centred: the grid and the centring of a rod that carries its
-    frame (``jaxrod.twisted.TwistedRod``)."""
+    frame (``jaxrod.twisted.TwistedRod``); for a branch also --max-folds."""
     p.add_argument("--layer-width", type=_float("layer-width"), default=None,
                    metavar="W", help="a rod that carries its frame: gather the grid into a "
                    "layer of width W (in L, 0 < W <= 1) at the middle, for a state localised "
@@ -34,12 +34,30 @@ def add_grid_options(p) -> None:
     p.add_argument("--centred", action="store_true",
                    help="a rod that carries its frame: hold a localised state's centre at the "
                    "middle (its slide along the rod, nearly free, counted stable)")
+    if branch:
+        p.add_argument("--max-folds", type=_count, default=None, metavar="K",
+                       help="a rod that carries its frame: end the branch at its K-th fold "
+                       "(K >= 1)")
+
+
+def _count(text: str) -> int:
+    """The --max-folds parser: an integer >= 1."""
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"max-folds must be an integer >= 1, got {text!r}")
+    return value
 
 
 def check_grid_options(args, file) -> None:
     """ParameterError where the grid options come with a rod that carries no frame."""
     for name, given in (("layer-width", getattr(args, "layer_width", None) is not None),
-                        ("centred", getattr(args, "centred", False))):
+                        ("centred", getattr(args, "centred", False)),
+                        ("max-folds", getattr(args, "max_folds", None) is not None)):
         if given and file.framed is None:
             raise ParameterError(f"{name}: only for a rod that carries its frame (support = "
                                  "\"clamped-clamped\", or a 3D cantilever programmed at an "
@@ -134,20 +152,23 @@ def framed_branch(args, file, start: float, stop: float) -> int:
     else:
         first = _resolved(rod.replace(key, start * factor), file.framed.turns)
     rod = first.rod
-    branch = twist_branch(rod, stop * factor, vary=key, start=first)
+    folds = {} if getattr(args, "max_folds", None) is None else {"max_folds": args.max_folds}
+    branch = twist_branch(rod, stop * factor, vary=key, start=first, **folds)
     tails = branch.column("tail")
     # a branch resolved at its start but not along the way: again at twice the degree
     while np.max(tails) > TOLERANCE and rod.n < MOST_DEGREE and first.converged:
         rod = dataclasses.replace(rod, n=min(2 * rod.n, MOST_DEGREE))
         first = twisted_equilibrium(rod, first.turns, start=first)
-        branch = twist_branch(rod, stop * factor, vary=key, start=first)
+        branch = twist_branch(rod, stop * factor, vary=key, start=first, **folds)
         tails = branch.column("tail")
     values = branch.column("value") / factor
     ok = all(p.converged for p in branch.points) and all(
         p.converged for p in branch.branch_points + branch.fold_points)
-    status = (Status(branch.status) if not branch.complete and branch.status in
+    # the end of the range, or the folds asked for (--max-folds)
+    complete = branch.complete or (bool(folds) and branch.status == int(Status.FOLDS_FOUND))
+    status = (Status(branch.status) if not complete and branch.status in
               {s.value for s in Status} else Status.NOT_CONVERGED if not ok or not
-              branch.complete else Status.UNDER_RESOLVED if np.max(tails) > TOLERANCE
+              complete else Status.UNDER_RESOLVED if np.max(tails) > TOLERANCE
               else Status.SUCCESS)
 
     def point(state):
@@ -164,8 +185,8 @@ def framed_branch(args, file, start: float, stop: float) -> int:
                               "kernel_dimension": abs(p.unstable[1] - p.unstable[0]),
                               "converged": p.converged} for p in branch.branch_points],
            "converged": status == Status.SUCCESS, "status": status.name.lower(),
-           "message": branch.message if not branch.complete else status.message,
-           "complete": branch.complete, "last_value": float(values[-1]), "n": rod.n,
+           "message": branch.message if not complete else status.message,
+           "complete": complete, "last_value": float(values[-1]), "n": rod.n,
            "error_estimate": float(np.max(tails))}
     if getattr(args, "out", None):
         from jaxrod.cli._output import _output_dir

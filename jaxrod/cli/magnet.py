@@ -238,7 +238,7 @@ def add_branch(sub) -> None:
     b.add_argument("--modes", type=int, default=0, metavar="K",
                    help="scene file: the lowest K omega^2 of the vibration modes at every "
                    "point (0 at a fold: the snap's soft mode)")
-    add_grid_options(b)
+    add_grid_options(b, branch=True)
     b.set_defaults(func=cmd_branch)
 
 

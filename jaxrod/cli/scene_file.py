@@ -48,7 +48,8 @@ def uses_scene_file(args, vary_is_file_key: bool = True) -> bool:
     given = [o for o, v in (("set", args.set), ("from", getattr(args, "start", None)),
                             ("vary", getattr(args, "vary", None) if vary_is_file_key
                              else None), ("layer-width", getattr(args, "layer_width", None)),
-                            ("centred", getattr(args, "centred", False))) if v]
+                            ("centred", getattr(args, "centred", False)),
+                            ("max-folds", getattr(args, "max_folds", None))) if v]
     if given:
         raise ParameterError(f"{given[0]}: name a scene file first (jaxrod COMMAND RIG.toml "
                              "...)")
