@@ -26,6 +26,16 @@ from jaxrod.twisted.rod import TwistedRod
 
 #: PyElastica's HelicalBucklingCase: B = 1.345, C = 0.789 (gamma = 0.58662 to five digits).
 PYELASTICA_GAMMA = 0.789 / 1.345
+#: The same case as a scene file.
+PYELASTICA_RIG = f"""units = "nondimensional"
+geometry = "3d"
+[rod]
+support = "clamped-clamped"
+twist_ratio = {PYELASTICA_GAMMA!r}
+[ends]
+rotation_turns = 27.0
+shortening = 0.03
+"""
 
 
 @pytest.mark.parametrize("kwargs, name", [
@@ -144,15 +154,7 @@ def test_the_fold_from_the_command_line(tmp_path):
     from command_line import run_cli
 
     rig = tmp_path / "helical.toml"
-    rig.write_text(f"""units = "nondimensional"
-geometry = "3d"
-[rod]
-support = "clamped-clamped"
-twist_ratio = {PYELASTICA_GAMMA!r}
-[ends]
-rotation_turns = 27.0
-shortening = 0.03
-""")
+    rig.write_text(PYELASTICA_RIG)
     proc = run_cli("branch", rig, "--vary", "ends.rotation_turns", "--from", "27", "--to",
                    "39", "--layer-width", "0.015", "--centred", "--max-folds", "1", "--json")
     assert proc.returncode == 0, proc.stderr
@@ -189,15 +191,7 @@ def test_pyelastica_case_as_a_scene_file_is_reached_by_turning_while_approaching
     from command_line import run_cli
 
     rig = tmp_path / "helical.toml"
-    rig.write_text(f"""units = "nondimensional"
-geometry = "3d"
-[rod]
-support = "clamped-clamped"
-twist_ratio = {PYELASTICA_GAMMA!r}
-[ends]
-rotation_turns = 27.0
-shortening = 0.03
-""")
+    rig.write_text(PYELASTICA_RIG)
     proc = run_cli("equilibrium", rig, "--json")
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
