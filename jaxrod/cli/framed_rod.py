@@ -162,6 +162,8 @@ def framed_branch(args, file, start: float, stop: float) -> int:
         branch = twist_branch(rod, stop * factor, vary=key, start=first, **folds)
         tails = branch.column("tail")
     values = branch.column("value") / factor
+    # the refined folds and branch points count in the resolution too
+    tails = np.append(tails, [p.state.tail for p in branch.fold_points + branch.branch_points])
     ok = all(p.converged for p in branch.points) and all(
         p.converged for p in branch.branch_points + branch.fold_points)
     # the end of the range, or the folds asked for (--max-folds)

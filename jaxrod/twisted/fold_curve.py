@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from jaxrod.params import ParameterError
+from jaxrod.status import Status
 from jaxrod.twisted.branch import TwistBranch, twist_branch, twisted_equilibrium
 from jaxrod.twisted.folds import TwistFold
 
@@ -37,8 +38,10 @@ class TwistFoldCurve:
 
     @property
     def complete(self) -> bool:
-        """Every point found and refined."""
-        return all(f is not None and f.converged for f in self.folds)
+        """Every point found, refined and resolved (its state's status SUCCESS: an
+        under-resolved fold is not counted)."""
+        return all(f is not None and f.converged and f.state.status == Status.SUCCESS
+                   for f in self.folds)
 
     def column(self, name: str) -> np.ndarray:
         """A field of the folds' states (``value``, ``tension``, ``twist_moment``...), NaN
