@@ -73,7 +73,8 @@ def twisted_rod(file, n: int, args=None):
     return TwistedRod(DEFAULT_TWIST_RATIO if h.twist_ratio is None else h.twist_ratio,
                       h.bending_ratio, h.tension, h.shortening, n, h.loads, h.support,
                       layer_width=getattr(args, "layer_width", None),
-                      centred=bool(getattr(args, "centred", False)))
+                      centred=bool(getattr(args, "centred", False)),
+                      contact_diameter=h.contact_diameter)
 
 
 def _resolved(rod, turns: float):

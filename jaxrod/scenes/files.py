@@ -78,9 +78,9 @@ from jaxrod.scenes.terms import (
 #: Allowed keys of each table, SI and nondimensional.
 TABLES = {
     "rod": {"si": ("length", "radius", "youngs_modulus", "support", "density",
-                   "stiffness_profile", "twist_ratio", "bending_ratio"),
+                   "stiffness_profile", "twist_ratio", "bending_ratio", "contact_diameter"),
             "nondimensional": ("support", "stiffness_profile", "twist_ratio",
-                               "bending_ratio")},
+                               "bending_ratio", "contact_diameter")},
     "ends": {"si": ("rotation_turns", "tension", "shortening"),
              "nondimensional": ("rotation_turns", "tension", "shortening")},
     "magnetisation": {"si": ("kind", "remanence", "saturation", "angle_deg", "profile_deg",
@@ -252,6 +252,8 @@ def scene_from(data: dict) -> FileScene:
             ("rod", ("twist_ratio", "bending_ratio"), framed, "a rod that carries its frame "
              "(support = \"clamped-clamped\", or a 3D rod programmed at an angle)"),
             ("ends", tuple(tables["ends"]), held, "a rod held at both ends (support = "
+             "\"clamped-clamped\")"),
+            ("rod", ("contact_diameter",), held, "a rod held at both ends (support = "
              "\"clamped-clamped\")")):
         for key in keys:
             if key in tables[table] and not ok:
@@ -416,7 +418,7 @@ def scene_from(data: dict) -> FileScene:
         terms[name] = PointDipole(M, c, np.array([u[0], 0.0, u[1]]), rail, along)
         inputs[f"{where}along"] = (f"{name}.along", 1.0 / L)
     if framed:
-        spec = framed_spec(terms, inputs, tables, L**2 / bending if si else 1.0, support)
+        spec = framed_spec(terms, inputs, tables, L**2 / bending if si else 1.0, support, L)
         return FileScene(None, inputs, L, data, margins, spec)
     scene = Scene(terms, geometry=geometry, support=support)
     return FileScene(scene, inputs, L, data, margins)

@@ -19,7 +19,8 @@ class FramedSpec:
     """support ("clamped-clamped" or "clamped"), twist_ratio (C / B, None: the rod's
     default), bending_ratio (B2 / B1), held at both ends exactly one of tension (T L^2 / B)
     and shortening, the far end's turns, and the loads (scene terms by name, the rod's
-    bending excluded)."""
+    bending excluded), and contact_diameter (the rod's diameter in L where its strands may
+    not pass through each other: ``TwistedRod.contact_diameter``; None: they may)."""
 
     support: str
     twist_ratio: float | None
@@ -28,6 +29,7 @@ class FramedSpec:
     shortening: float | None
     turns: float
     loads: dict
+    contact_diameter: float | None = None
 
     def value(self, key: str) -> float:
         """An input by its key: "turns", a field of this record, or a load's
@@ -40,10 +42,11 @@ class FramedSpec:
 
 
 def framed_spec(terms: dict, inputs: dict, tables: dict, per_tension: float,
-                support: str) -> FramedSpec:
+                support: str, length: float = 1.0) -> FramedSpec:
     """The framed rod of a file's ``[rod]`` and ``[ends]`` tables and its terms; adds its
     keys to ``inputs`` (file key -> (input, factor)). ``per_tension``: T L^2 / B per unit
-    of the file's tension (L^2 / (E I) in SI, 1 nondimensional)."""
+    of the file's tension (L^2 / (E I) in SI, 1 nondimensional); ``length``: the file's
+    unit of length per rod length (L in SI, 1 nondimensional)."""
     rod, ends = tables["rod"], tables["ends"]
     if isinstance(terms["bending"], TaperedBending):
         fail("rod.stiffness_profile", "a rod that carries its frame is uniform (no taper "
@@ -78,6 +81,12 @@ def framed_spec(terms: dict, inputs: dict, tables: dict, per_tension: float,
             fail(f"field.{name[5:]}" if name.startswith("field") else name,
                  "a rod that carries its frame takes uniform fields, gravity and magnets "
                  "acting on its far end (not a programmed remanence in a magnet's field)")
+    contact = None
+    if "contact_diameter" in rod:
+        contact = number(rod, "contact_diameter", "rod.") / length
+        if not 0.0 < contact <= 0.1:
+            fail("rod.contact_diameter", f"must be in (0, 0.1] rod lengths (a slender rod's "
+                                         f"diameter), got {rod['contact_diameter']!r}")
     return FramedSpec(support, ratios.get("twist_ratio"), ratios.get("bending_ratio", 1.0), tension,
                     shortening, number(ends, "rotation_turns", "ends.", required=False,
-                                       default=0.0), loads)
+                                       default=0.0), loads, contact)

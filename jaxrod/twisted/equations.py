@@ -36,6 +36,7 @@ from jaxrod.solvers.arclength import arclength_run
 from jaxrod.solvers.continuation import FOLDS_FOUND, _record, empty_branch
 from jaxrod.solvers.newton import newton
 from jaxrod.twisted.rod import (
+    CONTACT_KEY,
     INPUTS,
     MULTIPLIER_UNIT,
     TwistedRod,
@@ -47,6 +48,7 @@ from jaxrod.twisted.rod import (
     orbit_direction,
     tip,
 )
+from jaxrod.twisted.self_contact import contact_energy, contact_terms
 
 
 def _apply(keys: tuple, data, lam):
@@ -115,6 +117,9 @@ def _residual(w, aux, data, keys: tuple, count: int):
     d3 = jax.vmap(lambda a: frame(a[0], a[1], a[2])[:count, 2])(jets)
     held = jnp.zeros(count).at[2].set(1.0 - inputs[3]) if count == 3 else jnp.zeros(count)
     r_x = jnp.einsum("jrm,jr->m", disc.jet_matrix * q[:, None, None], grad_a) + nu * c
+    contact = data[1][2].get(CONTACT_KEY)
+    if contact is not None:
+        r_x = r_x + jax.grad(contact_energy)(x, contact)
     r_mu = MULTIPLIER_UNIT * (q @ d3 - held)
     r_nu = jnp.dot(c, x - x_ref) + (1.0 - on) * nu
     return jnp.concatenate([r_x, r_mu, r_nu[None]])
@@ -124,7 +129,8 @@ def _linearise(w, aux, data, keys: tuple, count: int):
     """(grad_z Lambda, [Hess_z Lambda | d grad_z Lambda / d lam]) assembled from the
     nodes: Lambda = sum_j q_j phi(a_j) + Psi(X) - U mu_z (1 - e) + nu c . (x - x_ref),
     the jets a_j = L_j x + l_j turns; the Hessian is sum_j q_j L_j^T phi_aa L_j + D^T
-    Psi_XX D (D = dX/dx) + sigma G G^T (the centring, G = dH/dx: ``TwistedRod.centred``),
+    Psi_XX D (D = dX/dx) + sigma G G^T (the centring, G = dH/dx: ``TwistedRod.centred``)
+    + the self-contact's (``jaxrod.twisted.self_contact.contact_terms``),
     bordered by the constraints' gradients and c; the column is the
     residual's derivative along the path (forward mode). The same numbers as autodiff of
     ``_lagrangian``, without its cost."""
@@ -140,6 +146,9 @@ def _linearise(w, aux, data, keys: tuple, count: int):
     G = jax.grad(centre_of_bending)(w[:disc.size], turns, disc)
     H_xx = (jnp.einsum("jrm,jrs,jsn->mn", Lq, hess_a, L) + D.T @ hess_X @ D
             + inputs[5] * jnp.outer(G, G))
+    contact = data[1][2].get(CONTACT_KEY)
+    if contact is not None:
+        H_xx = H_xx + contact_terms(w[:disc.size], contact, disc.size)[1]
     H_xmu = MULTIPLIER_UNIT * D[:count].T
     R, column = jax.jvp(lambda lam: _residual(w.at[-1].set(lam), aux, data, keys, count),
                         (w[-1],), (jnp.ones_like(w[-1]),))
@@ -252,7 +261,7 @@ class _Path:
     span: tuple
 
     def data(self, rod: TwistedRod, turns: float, disc):
-        return (disc, (jnp.asarray(float(turns)), rod.inputs(), rod.loads),
+        return (disc, (jnp.asarray(float(turns)), rod.inputs(), rod.program_loads()),
                 jnp.asarray(self.origin, float), jnp.asarray(self.span, float))
 
     def rod_at(self, rod: TwistedRod, lam: float) -> tuple[float | None, TwistedRod]:

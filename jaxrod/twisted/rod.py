@@ -42,6 +42,7 @@ from jaxrod.discretise.framed import (
 )
 from jaxrod.discretise.grid_map import check_layer_width
 from jaxrod.params import ParameterError
+from jaxrod.twisted.self_contact import SelfContact, contact_energy, self_contact
 
 #: Multipliers are solved for in units of the clamped-clamped Euler load 4 pi^2 B1 / L^2, so
 #: that the continuation's inner product weighs them like the shape's values.
@@ -51,6 +52,14 @@ MULTIPLIER_UNIT = 4.0 * math.pi**2
 #: CENTRING_STIFFNESS (ds int |v|^2)^2 / 2, of the order of the bending energy's own
 #: stiffness for a localised helix (int |v|^2 about 0.1).
 CENTRING_STIFFNESS = 1.0e4
+
+#: The self-contact penalty's default stiffness kappa (``jaxrod.twisted.self_contact``; in
+#: B1 / L per L^2): PyElastica's helical buckling case (h = 0.007, tension about 10^4) is
+#: held with the strands overlapping by about 1% of h.
+CONTACT_STIFFNESS = 1.0e10
+
+#: The key of the self-contact's data among a program's loads (no scene term's name).
+CONTACT_KEY = "self contact"
 
 #: C / B1 of a circular section of Poisson ratio 1/2 (C / B = 1 / (1 + nu)).
 DEFAULT_TWIST_RATIO = 2.0 / 3.0
@@ -73,7 +82,10 @@ class TwistedRod:
       resolution from k of about 25: the energy gains CENTRING_STIFFNESS H^2 / 2, zero with
       its gradient on every state symmetric about the middle (the localised helix), so
       those stay the rod's equilibria and the slide is counted stable; a state it would
-      move is reported not converged."""
+      move is reported not converged. contact_diameter: None (the strands may pass through
+      each other) or the rod's diameter h in L (0 < h <= 0.1; both ends held): the strands
+      repel where closer than h (``jaxrod.twisted.self_contact``), with the penalty's
+      stiffness ``contact_stiffness``."""
 
     twist_ratio: float = DEFAULT_TWIST_RATIO
     bending_ratio: float = 1.0
@@ -85,9 +97,22 @@ class TwistedRod:
     load_scale: float = 1.0
     layer_width: float | None = None
     centred: bool = False
+    contact_diameter: float | None = None
+    contact_stiffness: float = CONTACT_STIFFNESS
 
     def __post_init__(self):
         check_layer_width(self.layer_width)
+        h = self.contact_diameter
+        if h is not None:
+            if not (isinstance(h, (int, float)) and math.isfinite(h) and 0.0 < h <= 0.1):
+                raise ParameterError(f"contact_diameter: a number in (0, 0.1] (rod lengths), "
+                                     f"got {h!r}")
+            if self.support != "clamped-clamped":
+                raise ParameterError("contact_diameter: self-contact needs both ends held "
+                                     "(support = \"clamped-clamped\")")
+        k = self.contact_stiffness
+        if not (isinstance(k, (int, float)) and math.isfinite(k) and k > 0):
+            raise ParameterError(f"contact_stiffness: a finite number > 0, got {k!r}")
         if not isinstance(self.centred, bool):
             raise ParameterError(f"centred: True or False, got {self.centred!r}")
         for name in ("twist_ratio", "bending_ratio"):
@@ -174,6 +199,14 @@ class TwistedRod:
         loads = dict(self.loads)
         loads[name] = dataclasses.replace(t, **{field: value})
         return dataclasses.replace(self, loads=loads)
+
+    def program_loads(self) -> dict:
+        """The loads as a program carries them: the rod's, and the self-contact's data
+        (``CONTACT_KEY``) where it has a diameter."""
+        if self.contact_diameter is None:
+            return self.loads
+        return {**self.loads, CONTACT_KEY: self_contact(
+            self.n, self.layer_width, self.contact_diameter, self.contact_stiffness)}
 
     def inputs(self) -> jax.Array:
         """(gamma, beta, t, e, load scale, centring stiffness): the traced inputs of the
@@ -265,13 +298,15 @@ def centre_of_bending(x, turns, disc: FramedDiscretisation) -> jax.Array:
 
 
 def energy(x, turns, disc: FramedDiscretisation, inputs, loads: dict | None = None) -> jax.Array:
-    """E(x; turns) (module docstring) with the loads' terms, and the centring's
-    inputs[5] H^2 / 2 (``TwistedRod.centred``)."""
+    """E(x; turns) (module docstring) with the loads' terms, the centring's
+    inputs[5] H^2 / 2 (``TwistedRod.centred``) and the self-contact's penalty."""
     loads = {} if loads is None else loads
     e = disc.integrate(jax.vmap(density, in_axes=(0, 0, None, None))(
         disc.jets(x, turns), disc.quad_nodes, inputs, loads))
-    return (e + endpoint(tip(x, turns, disc), inputs, loads)
-            + 0.5 * inputs[5] * centre_of_bending(x, turns, disc) ** 2)
+    e = (e + endpoint(tip(x, turns, disc), inputs, loads)
+         + 0.5 * inputs[5] * centre_of_bending(x, turns, disc) ** 2)
+    contact = loads.get(CONTACT_KEY)
+    return e if contact is None else e + contact_energy(x, contact)
 
 
 def far_end(x, disc: FramedDiscretisation, inputs, count: int) -> jax.Array:

@@ -16,7 +16,14 @@ from jaxrod.equilibria.resolution import TOLERANCE
 from jaxrod.programs import jit
 from jaxrod.status import Status
 from jaxrod.twisted.equations import FLOOR_TOL, _apply, _Path
-from jaxrod.twisted.rod import MULTIPLIER_UNIT, TwistedRod, centre_of_bending, energy
+from jaxrod.twisted.rod import (
+    CONTACT_KEY,
+    MULTIPLIER_UNIT,
+    TwistedRod,
+    centre_of_bending,
+    energy,
+)
+from jaxrod.twisted.self_contact import self_distance
 
 
 @dataclasses.dataclass(frozen=True)
@@ -46,6 +53,7 @@ class TwistState:
     tail: float
     value: float = float("nan")
     path_tail: float = float("nan")
+    self_distance: float = float("nan")
 
     @property
     def x(self) -> np.ndarray:
@@ -87,18 +95,23 @@ class TwistState:
                 "unstable": self.unstable, "converged": self.converged,
                 "residual": self.residual, "iterations": self.iterations,
                 "chebyshev_tail": self.tail, "n": self.rod.n,
-                "status": self.status.name.lower()}
+                "status": self.status.name.lower(),
+                **({} if math.isnan(self.self_distance) else
+                   {"self_distance": self.self_distance})}
 
 
 def _twist_measures(x, lam, keys: tuple, data):
     """(twist moment, Tw, Wr, turns, tension under tension control, the centring's force
-    on the state: the largest entry of sigma H dH/dx) of one state."""
+    on the state: the largest entry of sigma H dH/dx, the self-distance or NaN) of one
+    state."""
     turns, inputs, loads = _apply(keys, data, lam)
     disc = data[0]
     moment = jax.grad(energy, argnums=1)(x, turns, disc, inputs, loads) / (2.0 * math.pi)
     H, G = jax.value_and_grad(centre_of_bending)(x, turns, disc)
+    contact = loads.get(CONTACT_KEY)
+    apart = jnp.nan if contact is None else self_distance(x, contact)
     return (moment, *twist_and_writhe(disc, x, turns), turns, inputs[2],
-            jnp.abs(inputs[5] * H) * jnp.max(jnp.abs(G)))
+            jnp.abs(inputs[5] * H) * jnp.max(jnp.abs(G)), apart)
 
 
 _measures_program = jit(jax.vmap(_twist_measures, in_axes=(0, 0, None, None)),
@@ -113,7 +126,7 @@ def _states(rod: TwistedRod, path: _Path, data, W, converged, residual, iteratio
     W = np.atleast_2d(np.asarray(W))
     disc = data[0]
     size = disc.size
-    moment, tw, wr, turns, pull, held = (np.asarray(a) for a in _measures_program(
+    moment, tw, wr, turns, pull, held, apart = (np.asarray(a) for a in _measures_program(
         jnp.asarray(W[:, :size]), jnp.asarray(W[:, -1]), path.keys, data))
     # a state the centring or the phase condition holds away from the rod's own
     # equilibrium (their forces sigma H dH/dx and nu c, c a unit vector) is not one of them
@@ -136,7 +149,7 @@ def _states(rod: TwistedRod, path: _Path, data, W, converged, residual, iteratio
             at, W[i], float(turns[i]), float(moment[i]), float(tension[i]), float(tw[i]),
             float(wr[i]), int(index[i]) - int(bordering[i]), bool(converged[i]),
             float(residual[i]), int(iterations[i]), float(tail[i]),
-            path.origin[0] + path.span[0] * lam))
+            path.origin[0] + path.span[0] * lam, self_distance=float(apart[i])))
     return states
 
 
