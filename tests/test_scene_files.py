@@ -242,6 +242,10 @@ BAD = [
     (HELD.replace("tension = 5.0", "shortening = 1.5"), "ends.shortening", "(0, 1)"),
     (HELD.replace('geometry = "3d"', 'geometry = "planar"'), "rod.support", "3d"),
     (HELD.replace('"clamped-clamped"', '"clamped"'), "rod.twist_ratio", "carries its frame"),
+    (HELD.replace("twist_ratio = 0.769", "twist_ratio = 0.769\ncontact_diameter = 0.5"),
+     "rod.contact_diameter", "(0, 0.1]"),
+    (CANTILEVER.replace("length = 0.05", "length = 0.05\ncontact_diameter = 1e-3"),
+     "rod.contact_diameter", "both ends"),
 ]
 
 

@@ -33,8 +33,8 @@ def _coiled_state(n: int) -> np.ndarray:
 
 def test_the_assembled_contact_derivatives_are_autodiffs():
     """``contact_terms`` (the pairs' blocks chained through the centreline) against
-    jax.grad and jax.hessian of ``contact_energy``, n = 24 on a layered grid (layer width 0.2), a state in
-    contact: to 1e-12 of the largest entry (round-off)."""
+    jax.grad and jax.hessian of ``contact_energy``, n = 24 on a layered grid (layer width
+    0.2), a state in contact: to 1e-12 of the largest entry (round-off)."""
     n = 24
     contact = self_contact(n, 0.2, 0.042, 1.0e4)
     x = jnp.asarray(_coiled_state(n))

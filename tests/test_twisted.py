@@ -318,6 +318,46 @@ def test_the_straight_rods_branch_points_are_the_greenhill_moments():
     assert bent.points[1].turns < first.state.turns
 
 
+def _contact_branch(n: int, layer_width: float) -> tuple:
+    """PyElastica's rod (3% shortening) with self-contact at its diameter 0.007 L, turned
+    from 25 turns (the helix reached by turning while approaching, at n = 48, then
+    regridded) to 40."""
+    rod = TwistedRod(twist_ratio=PYELASTICA_GAMMA, shortening=0.03, n=48)
+    start = twisted_equilibrium(rod, 25.0)
+    rod = TwistedRod(twist_ratio=PYELASTICA_GAMMA, shortening=0.03, n=n,
+                     layer_width=layer_width, centred=True, contact_diameter=0.007)
+    start = twisted_equilibrium(rod, 25.0, start=start)
+    return twist_branch(rod, 40.0, start=start, ds_max=1.0, max_points=200)
+
+
+@pytest.mark.slow
+def test_self_contact_closes_the_hysteresis_loop_of_the_localised_helix():
+    """PyElastica's rod of diameter 0.007 L turned on under 3% shortening. The helix's fold
+    (no contact yet: its strands 2.2 h apart) is the closed form's to 1e-10. Past it the
+    loop tightens, unstable, as the turns fall, until its strands touch (self-distance h);
+    held apart there (never closer than 0.95 h: the penalty's overlap), the branch turns
+    back at a second fold at fewer turns and climbs past the first fold's turns. The
+    rod turned on jumps there; turned back, it stays looped down to the second fold: the
+    hysteresis loop. The second fold at n = 96 (layer 0.012) and n = 128 (layer 0.01)
+    agree to 0.5% (a contact state's kink is resolved algebraically, not spectrally;
+    measured 0.15%)."""
+    turns_f, _, _ = _localised_fold(PYELASTICA_GAMMA, 0.03)
+    lows = []
+    for n, width in ((96, 0.012), (128, 0.01)):
+        branch = _contact_branch(n, width)
+        assert branch.complete and len(branch.folds) == 2
+        up, down = branch.fold_points
+        assert up.converged and down.converged
+        assert abs(up.value / turns_f - 1) <= 1e-10 and up.state.self_distance > 2 * 0.007
+        assert down.value < up.value and down.state.self_distance <= 0.007
+        assert branch.column("self_distance").min() >= 0.95 * 0.007
+        after = branch.points[branch.folds[1]:]
+        assert after[-1].turns > up.value and all(p.self_distance < 0.007 for p in after)
+        lows.append(down.value)
+    assert abs(lows[0] / lows[1] - 1) <= 5e-3
+    jax.clear_caches()
+
+
 @pytest.mark.slow
 def test_an_axial_field_changes_nothing_under_shortening_control_but_the_reaction():
     """A hard-magnetic rod magnetised along its tangent in a field b = 5 along the axis,

@@ -156,8 +156,10 @@ def framed_branch(args, file, start: float, stop: float) -> int:
     folds = {} if getattr(args, "max_folds", None) is None else {"max_folds": args.max_folds}
     branch = twist_branch(rod, stop * factor, vary=key, start=first, **folds)
     tails = branch.column("tail")
-    # a branch resolved at its start but not along the way: again at twice the degree
-    while np.max(tails) > TOLERANCE and rod.n < MOST_DEGREE and first.converged:
+    # a branch resolved at its start but not along the way: again at twice the degree (not
+    # with self-contact: a contact state's kink makes its tail fall algebraically in n)
+    while (np.max(tails) > TOLERANCE and rod.n < MOST_DEGREE and first.converged
+           and rod.contact_diameter is None):
         rod = dataclasses.replace(rod, n=min(2 * rod.n, MOST_DEGREE))
         first = twisted_equilibrium(rod, first.turns, start=first)
         branch = twist_branch(rod, stop * factor, vary=key, start=first, **folds)
@@ -181,6 +183,8 @@ def framed_branch(args, file, start: float, stop: float) -> int:
            "twist_moment": branch.column("twist_moment").tolist(),
            "tension": branch.column("tension").tolist(),
            "unstable": branch.column("unstable").tolist(),
+           **({"self_distance": branch.column("self_distance").tolist()}
+              if rod.contact_diameter is not None else {}),
            "stable": [bool(u == 0) for u in branch.column("unstable")],
            "folds": [{**point(f.state), "converged": f.converged}
                      for f in branch.fold_points],

@@ -42,7 +42,7 @@ from jaxrod.discretise.framed import (
 )
 from jaxrod.discretise.grid_map import check_layer_width
 from jaxrod.params import ParameterError
-from jaxrod.twisted.self_contact import SelfContact, contact_energy, self_contact
+from jaxrod.twisted.self_contact import contact_energy, self_contact
 
 #: Multipliers are solved for in units of the clamped-clamped Euler load 4 pi^2 B1 / L^2, so
 #: that the continuation's inner product weighs them like the shape's values.
@@ -54,9 +54,9 @@ MULTIPLIER_UNIT = 4.0 * math.pi**2
 CENTRING_STIFFNESS = 1.0e4
 
 #: The self-contact penalty's default stiffness kappa (``jaxrod.twisted.self_contact``; in
-#: B1 / L per L^2): PyElastica's helical buckling case (h = 0.007, tension about 10^4) is
-#: held with the strands overlapping by about 1% of h.
-CONTACT_STIFFNESS = 1.0e10
+#: B1 / L per L^2): PyElastica's rod (h = 0.007 L) looped at tensions near 2 x 10^4 is held
+#: with its strands overlapping by about 1% of h (3% at 10^10).
+CONTACT_STIFFNESS = 1.0e11
 
 #: The key of the self-contact's data among a program's loads (no scene term's name).
 CONTACT_KEY = "self contact"
