@@ -77,6 +77,7 @@ def test_the_contact_energy_is_its_double_integral():
     (dict(contact_diameter=0.2), "contact_diameter"),
     (dict(contact_diameter=float("nan")), "contact_diameter"),
     (dict(contact_diameter=0.01, contact_stiffness=-1.0), "contact_stiffness"),
+    (dict(contact_diameter=0.01, contact_grid=0), "contact_grid"),
 ])
 def test_bad_contact_inputs_name_the_parameter(options, name):
     with pytest.raises(ParameterError, match=name):

@@ -42,7 +42,7 @@ from jaxrod.discretise.framed import (
 )
 from jaxrod.discretise.grid_map import check_layer_width
 from jaxrod.params import ParameterError
-from jaxrod.twisted.self_contact import contact_energy, self_contact
+from jaxrod.twisted.self_contact import CONTACT_DEGREE_FACTOR, contact_energy, self_contact
 
 #: Multipliers are solved for in units of the clamped-clamped Euler load 4 pi^2 B1 / L^2, so
 #: that the continuation's inner product weighs them like the shape's values.
@@ -85,7 +85,7 @@ class TwistedRod:
       move is reported not converged. contact_diameter: None (the strands may pass through
       each other) or the rod's diameter h in L (0 < h <= 0.1; both ends held): the strands
       repel where closer than h (``jaxrod.twisted.self_contact``), with the penalty's
-      stiffness ``contact_stiffness``."""
+      stiffness ``contact_stiffness``, on a grid of degree ``contact_grid`` n."""
 
     twist_ratio: float = DEFAULT_TWIST_RATIO
     bending_ratio: float = 1.0
@@ -99,6 +99,7 @@ class TwistedRod:
     centred: bool = False
     contact_diameter: float | None = None
     contact_stiffness: float = CONTACT_STIFFNESS
+    contact_grid: int = CONTACT_DEGREE_FACTOR
 
     def __post_init__(self):
         check_layer_width(self.layer_width)
@@ -113,6 +114,10 @@ class TwistedRod:
         k = self.contact_stiffness
         if not (isinstance(k, (int, float)) and math.isfinite(k) and k > 0):
             raise ParameterError(f"contact_stiffness: a finite number > 0, got {k!r}")
+        if not (isinstance(self.contact_grid, (int, np.integer)) and 1 <= self.contact_grid
+                <= 16):
+            raise ParameterError(f"contact_grid: an integer in [1, 16] (the contact grid's "
+                                 f"degree in units of n), got {self.contact_grid!r}")
         if not isinstance(self.centred, bool):
             raise ParameterError(f"centred: True or False, got {self.centred!r}")
         for name in ("twist_ratio", "bending_ratio"):
@@ -206,7 +211,8 @@ class TwistedRod:
         if self.contact_diameter is None:
             return self.loads
         return {**self.loads, CONTACT_KEY: self_contact(
-            self.n, self.layer_width, self.contact_diameter, self.contact_stiffness)}
+            self.n, self.layer_width, self.contact_diameter, self.contact_stiffness,
+            self.contact_grid * self.n)}
 
     def inputs(self) -> jax.Array:
         """(gamma, beta, t, e, load scale, centring stiffness): the traced inputs of the
