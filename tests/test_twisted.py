@@ -336,11 +336,11 @@ def test_self_contact_closes_the_hysteresis_loop_of_the_localised_helix():
     (no contact yet: its strands 2.2 h apart) is the closed form's to 1e-10. Past it the
     loop tightens, unstable, as the turns fall, until its strands touch (self-distance h);
     held apart there (never closer than 0.95 h: the penalty's overlap), the branch turns
-    back at a second fold at fewer turns and climbs past the first fold's turns. The
-    rod turned on jumps there; turned back, it stays looped down to the second fold: the
-    hysteresis loop. The second fold at n = 96 (layer 0.012) and n = 128 (layer 0.01)
-    agree to 0.5% (a contact state's kink is resolved algebraically, not spectrally;
-    measured 0.15%)."""
+    back at a second fold at fewer turns and climbs, stable, past the first fold's turns
+    (one unstable direction between the folds). The rod turned on jumps there; turned
+    back, it stays looped down to the second fold: the hysteresis loop. The second fold
+    at n = 96 (layer 0.012) and n = 128 (layer 0.01) agree to 0.5% (a contact state's
+    kink is resolved algebraically, not spectrally; measured 0.19%)."""
     turns_f, _, _ = _localised_fold(PYELASTICA_GAMMA, 0.03)
     lows = []
     for n, width in ((96, 0.012), (128, 0.01)):
@@ -351,8 +351,12 @@ def test_self_contact_closes_the_hysteresis_loop_of_the_localised_helix():
         assert abs(up.value / turns_f - 1) <= 1e-10 and up.state.self_distance > 2 * 0.007
         assert down.value < up.value and down.state.self_distance <= 0.007
         assert branch.column("self_distance").min() >= 0.95 * 0.007
+        between = branch.points[branch.folds[0]:branch.folds[1]]
         after = branch.points[branch.folds[1]:]
         assert after[-1].turns > up.value and all(p.self_distance < 0.007 for p in after)
+        # one unstable direction between the folds, none on the looped branch
+        assert all(p.unstable == 1 for p in between[1:-1] if p.converged)
+        assert all(p.unstable == 0 for p in after[1:] if p.converged)
         lows.append(down.value)
     assert abs(lows[0] / lows[1] - 1) <= 5e-3
     jax.clear_caches()

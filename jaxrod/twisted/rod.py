@@ -61,6 +61,12 @@ CONTACT_STIFFNESS = 1.0e11
 #: The key of the self-contact's data among a program's loads (no scene term's name).
 CONTACT_KEY = "self contact"
 
+#: The centring's stiffness on a rod with self-contact: a looped state's slide along the rod
+#: moves its contact zone across the contact grid's nodes, and the penalty's quadrature
+#: error there (eigenvalues of order 0.1 in the Hessian's units at n = 128) outweighs the
+#: 1e4 of the rod without contact, giving the slide a spurious sign.
+CONTACT_CENTRING_STIFFNESS = 1.0e8
+
 #: C / B1 of a circular section of Poisson ratio 1/2 (C / B = 1 / (1 + nu)).
 DEFAULT_TWIST_RATIO = 2.0 / 3.0
 
@@ -217,9 +223,11 @@ class TwistedRod:
     def inputs(self) -> jax.Array:
         """(gamma, beta, t, e, load scale, centring stiffness): the traced inputs of the
         energy."""
+        sigma = CENTRING_STIFFNESS if self.contact_diameter is None else \
+            CONTACT_CENTRING_STIFFNESS
         return jnp.array([self.twist_ratio, self.bending_ratio, self.tension or 0.0,
                           self.shortening or 0.0, self.load_scale,
-                          CENTRING_STIFFNESS if self.centred else 0.0])
+                          sigma if self.centred else 0.0])
 
 
 #: The rod's own inputs, by name, in the order of ``TwistedRod.inputs``.
