@@ -85,7 +85,8 @@ class TwistedRod:
       width about 1 / k (k = sqrt(4 t - m^2) / 2). centred: hold a localised state's
       centre at the middle (``centre_of_bending``), where its slide along the rod is a
       direction of nearly zero stiffness (exp(-k) of the others), below the arithmetic's
-      resolution from k of about 25: the energy gains CENTRING_STIFFNESS H^2 / 2, zero with
+      resolution from k of about 25: the energy gains sigma H^2 / 2 (sigma =
+      CENTRING_STIFFNESS, or CONTACT_CENTRING_STIFFNESS with self-contact), zero with
       its gradient on every state symmetric about the middle (the localised helix), so
       those stay the rod's equilibria and the slide is counted stable; a state it would
       move is reported not converged. contact_diameter: None (the strands may pass through
