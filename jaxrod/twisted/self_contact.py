@@ -71,7 +71,7 @@ def _contact_arrays(n: int, layer_width: float | None, diameter: float, degree: 
     interp = spectral.interpolation_matrix(n, xi)[:, 1:n]  # both ends held: v = 0 there
     cumint = spectral.cumulative_integration_matrix(degree) * stretch
     apart = np.abs(s[:, None] - s[None, :]) > EXCLUSION * diameter
-    return interp, cumint, np.outer(weights, weights) * apart, s
+    return interp, cumint, np.outer(weights, weights) * apart
 
 
 def self_contact(n: int, layer_width: float | None, diameter: float, stiffness: float,
@@ -80,7 +80,7 @@ def self_contact(n: int, layer_width: float | None, diameter: float, stiffness: 
     ``layer_width`` (``jaxrod.discretise.grid_map``); ``degree``: the contact grid's
     (default ``CONTACT_DEGREE_FACTOR`` n)."""
     degree = CONTACT_DEGREE_FACTOR * int(n) if degree is None else int(degree)
-    interp, cumint, pairs, _ = _contact_arrays(int(n), layer_width, float(diameter), degree)
+    interp, cumint, pairs = _contact_arrays(int(n), layer_width, float(diameter), degree)
     return SelfContact(jnp.asarray(float(diameter)), jnp.asarray(float(stiffness)),
                        *(jax.device_put(a) for a in (interp, cumint, pairs)))
 
