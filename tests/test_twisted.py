@@ -169,14 +169,24 @@ def test_the_fold_from_the_command_line(tmp_path):
 
 def _loaded_rod(**kwargs) -> TwistedRod:
     """A rod under every kind of load the framed rod takes: gravity off the axis, a soft
-    wire's anisotropy, a programmed remanence in a tilted field, a magnet at the far end."""
-    from jaxrod.scenes.terms import Anisotropy, Gravity, PointDipole, ProgrammedMagnetisation
+    wire's anisotropy, a programmed remanence in a tilted field and in a magnet's field (on
+    the positions along the rod), a magnet at the far end."""
+    from jaxrod.scenes.terms import (
+        Anisotropy,
+        Gravity,
+        PointDipole,
+        ProgrammedDipole,
+        ProgrammedMagnetisation,
+    )
 
     loads = {"gravity": Gravity(2.0, jnp.array([0.6, 0.0, -0.8])),
              "soft": Anisotropy(1.5, jnp.array([0.0, 0.6, 0.8])),
              "field": ProgrammedMagnetisation(3.0, 0.4, jnp.array([0.3, -0.5]),
                                               jnp.array([1.0, 0.2])),
-             "magnet": PointDipole(0.7, jnp.array([0.5, 0.2, 2.5]))}
+             "magnet": PointDipole(0.7, jnp.array([0.5, 0.2, 2.5])),
+             "programmed magnet": ProgrammedDipole(0.4, jnp.array([1.5, 0.3, 0.8]),
+                                                   jnp.array([0.0, 1.0, 0.2]),
+                                                   jnp.array([0.3, 0.5]))}
     return TwistedRod(loads=loads, **kwargs)
 
 
@@ -449,16 +459,19 @@ def test_the_framed_cantilever_in_an_opposed_field_buckles_at_pi_squared_over_fo
     ("cantilever", []),
     ("cantilever", ["magnetisation.angle_deg=30.0"]),
     ("permanent-magnet", ["field.0.angle_deg=20.0"]),
+    ("rail", ["field.0.position.0=0.5"]),
 ])
 def test_planar_scenes_as_framed_rods_give_their_planar_numbers(rig, settings, tmp_path):
     """Planar scenes (a hard-magnetic cantilever in a field across it, the same programmed
-    at 30 degrees to its tangent, the paper's rig with its magnet at 20 degrees) solved as
+    at 30 degrees to its tangent, the paper's rig with its magnet at 20 degrees, a rod
+    programmed at 10 degrees under gravity in a magnet's non-uniform field: a load on the
+    positions along the rod, ``jaxrod.twisted.distributed``) solved as
     rods that carry their frame (n = 24, the load ramp from the straight rod): the tip angle
     is the planar rod's (n = 24 and above until resolved) to 1e-9 degrees, the rod stays in
     its plane, and its count of unstable directions (in the plane, out of it and in twist)
     is zero where the planar state is stable and, where the 3D director model has the
     term, stable out of the plane."""
-    from test_scene_files import CANTILEVER
+    from test_scene_files import CANTILEVER, RAIL
 
     from jaxrod.equilibria.resolution import resolved_equilibrium
     from jaxrod.scenes.files import load
@@ -471,6 +484,9 @@ def test_planar_scenes_as_framed_rods_give_their_planar_numbers(rig, settings, t
         if settings:
             text = text.replace("remanence = 1.0e5", "remanence = 1.0e5\nangle_deg = 0.0")
         path.write_text(text)
+    elif rig == "rail":
+        path = tmp_path / "rail.toml"
+        path.write_text(RAIL.replace('kind = "soft"', 'kind = "hard"\nangle_deg = 10'))
     file = load(path, settings)
     planar = resolved_equilibrium(file.scene, n=24)
     assert planar.status.name == "SUCCESS"
@@ -481,7 +497,7 @@ def test_planar_scenes_as_framed_rods_give_their_planar_numbers(rig, settings, t
     assert abs(math.degrees(math.atan2(X[0], X[2])) - planar.equilibrium.tip_angle_deg) <= 1e-9
     assert np.max(np.abs(state.centreline()[1][:, 1])) <= 1e-12
     stable = planar.equilibrium.stable
-    if not settings or rig != "cantilever":
+    if rig == "permanent-magnet" or (rig == "cantilever" and not settings):
         stable = stable and out_of_plane_stability(
             file.scene, planar.equilibrium.state, planar.n).stable_out_of_plane
     assert (state.unstable == 0) == stable

@@ -76,11 +76,6 @@ def framed_spec(terms: dict, inputs: dict, tables: dict, per_tension: float,
     if support != "clamped":
         inputs["ends.rotation_turns"] = ("turns", 1.0)
     loads = {name: t for name, t in terms.items() if name != "bending"}
-    for name, t in loads.items():
-        if t.distributed is not None:
-            fail(f"field.{name[5:]}" if name.startswith("field") else name,
-                 "a rod that carries its frame takes uniform fields, gravity and magnets "
-                 "acting on its far end (not a programmed remanence in a magnet's field)")
     contact = None
     if "contact_diameter" in rod:
         contact = number(rod, "contact_diameter", "rod.") / length

@@ -35,6 +35,7 @@ from jaxrod.programs import jit
 from jaxrod.solvers.arclength import arclength_run
 from jaxrod.solvers.continuation import FOLDS_FOUND, _record, empty_branch
 from jaxrod.solvers.newton import newton
+from jaxrod.twisted.distributed import POSITIONS_KEY, distributed_energy
 from jaxrod.twisted.rod import (
     CONTACT_KEY,
     INPUTS,
@@ -120,6 +121,9 @@ def _residual(w, aux, data, keys: tuple, count: int):
     contact = data[1][2].get(CONTACT_KEY)
     if contact is not None:
         r_x = r_x + jax.grad(contact_energy)(x, contact)
+    if POSITIONS_KEY in data[1][2]:
+        turns, _, loads = _apply(keys, data, w[-1])
+        r_x = r_x + jax.grad(distributed_energy)(x, turns, disc, inputs, loads)
     r_mu = MULTIPLIER_UNIT * (q @ d3 - held)
     r_nu = jnp.dot(c, x - x_ref) + (1.0 - on) * nu
     return jnp.concatenate([r_x, r_mu, r_nu[None]])
@@ -130,8 +134,9 @@ def _linearise(w, aux, data, keys: tuple, count: int):
     nodes: Lambda = sum_j q_j phi(a_j) + Psi(X) - U mu_z (1 - e) + nu c . (x - x_ref),
     the jets a_j = L_j x + l_j turns; the Hessian is sum_j q_j L_j^T phi_aa L_j + D^T
     Psi_XX D (D = dX/dx) + sigma G G^T (the centring, G = dH/dx: ``TwistedRod.centred``)
-    + the self-contact's (``jaxrod.twisted.self_contact.contact_terms``),
-    bordered by the constraints' gradients and c; the column is the
+    + the self-contact's (``jaxrod.twisted.self_contact.contact_terms``) + the
+    Hessian of the loads that act on the positions along the rod (autodiff,
+    ``jaxrod.twisted.distributed``), bordered by the constraints' gradients and c; the column is the
     residual's derivative along the path (forward mode). The same numbers as autodiff of
     ``_lagrangian``, without its cost."""
     disc = data[0]
@@ -149,6 +154,10 @@ def _linearise(w, aux, data, keys: tuple, count: int):
     contact = data[1][2].get(CONTACT_KEY)
     if contact is not None:
         H_xx = H_xx + contact_terms(w[:disc.size], contact, disc.size)[1]
+    if POSITIONS_KEY in data[1][2]:
+        loads = _apply(keys, data, w[-1])[2]
+        H_xx = H_xx + jax.hessian(distributed_energy)(w[:disc.size], turns, disc, inputs,
+                                                      loads)
     H_xmu = MULTIPLIER_UNIT * D[:count].T
     R, column = jax.jvp(lambda lam: _residual(w.at[-1].set(lam), aux, data, keys, count),
                         (w[-1],), (jnp.ones_like(w[-1]),))

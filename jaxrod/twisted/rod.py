@@ -42,6 +42,12 @@ from jaxrod.discretise.framed import (
 )
 from jaxrod.discretise.grid_map import check_layer_width
 from jaxrod.params import ParameterError
+from jaxrod.twisted.distributed import (
+    POSITIONS_KEY,
+    acts_on_positions,
+    distributed_energy,
+    quad_positions,
+)
 from jaxrod.twisted.self_contact import CONTACT_DEGREE_FACTOR, contact_energy, self_contact
 
 #: Multipliers are solved for in units of the clamped-clamped Euler load 4 pi^2 B1 / L^2, so
@@ -155,11 +161,10 @@ class TwistedRod:
             if not hasattr(t, "term_name") or getattr(t, "elastic", False):
                 raise ParameterError(f"loads: {name!r} is not a load term of "
                                      "jaxrod.scenes.terms (the rod's own energy is built in)")
-            if t.distributed is not None:
+            if t.distributed is not None and not acts_on_positions(t):
                 raise ParameterError(f"loads: {name!r} ({t.term_name}) acts on the positions "
-                                     "along the rod; the rod held at both ends takes density "
-                                     "and end terms (uniform fields, gravity, magnets acting "
-                                     "on the far end)")
+                                     "along the rod with no form for a rod that carries its "
+                                     "frame (framed_distributed)")
 
     @property
     def symmetric(self) -> bool:
@@ -213,13 +218,17 @@ class TwistedRod:
         return dataclasses.replace(self, loads=loads)
 
     def program_loads(self) -> dict:
-        """The loads as a program carries them: the rod's, and the self-contact's data
-        (``CONTACT_KEY``) where it has a diameter."""
-        if self.contact_diameter is None:
-            return self.loads
-        return {**self.loads, CONTACT_KEY: self_contact(
-            self.n, self.layer_width, self.contact_diameter, self.contact_stiffness,
-            self.contact_grid * self.n)}
+        """The loads as a program carries them: the rod's, the positions' data
+        (``POSITIONS_KEY``) where a load acts on the positions along the rod, and the
+        self-contact's (``CONTACT_KEY``) where it has a diameter."""
+        loads = dict(self.loads)
+        if any(acts_on_positions(t) for t in self.loads.values()):
+            loads[POSITIONS_KEY] = quad_positions(self.discretisation(), self.layer_width)
+        if self.contact_diameter is not None:
+            loads[CONTACT_KEY] = self_contact(
+                self.n, self.layer_width, self.contact_diameter, self.contact_stiffness,
+                self.contact_grid * self.n)
+        return loads
 
     def inputs(self) -> jax.Array:
         """(gamma, beta, t, e, load scale, centring stiffness): the traced inputs of the
@@ -313,12 +322,14 @@ def centre_of_bending(x, turns, disc: FramedDiscretisation) -> jax.Array:
 
 
 def energy(x, turns, disc: FramedDiscretisation, inputs, loads: dict | None = None) -> jax.Array:
-    """E(x; turns) (module docstring) with the loads' terms, the centring's
+    """E(x; turns) (module docstring) with the loads' terms (those that act on the
+    positions along the rod: ``jaxrod.twisted.distributed``), the centring's
     inputs[5] H^2 / 2 (``TwistedRod.centred``) and the self-contact's penalty."""
     loads = {} if loads is None else loads
     e = disc.integrate(jax.vmap(density, in_axes=(0, 0, None, None))(
         disc.jets(x, turns), disc.quad_nodes, inputs, loads))
     e = (e + endpoint(tip(x, turns, disc), inputs, loads)
+         + distributed_energy(x, turns, disc, inputs, loads)
          + 0.5 * inputs[5] * centre_of_bending(x, turns, disc) ** 2)
     contact = loads.get(CONTACT_KEY)
     return e if contact is None else e + contact_energy(x, contact)

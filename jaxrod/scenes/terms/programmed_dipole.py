@@ -8,7 +8,10 @@ the positions r(s) and directors (nondimensional, lengths in rod lengths)
 m(s) = (sin(theta + phi), 0, cos(theta + phi)) the magnetisation's direction on the planar
 rod, c the magnet's centre, m_hat its moment's direction, M the dipole group of
 ``point_dipole`` (with phi = 0 the two terms differ by a constant: the potential at the
-clamp). Planar rods only (the 3D chart carries no d1).
+clamp). On a rod that carries its frame (``jaxrod.twisted``) the magnetisation is
+m(s) = cos(phi) d3 + sin(phi) d1 in the material frame (``framed_distributed``), which in
+the plane (d1 = (cos theta, 0, -sin theta)) is the planar rod's. Not on the 3D director
+chart, which carries no d1.
 """
 
 from __future__ import annotations
@@ -38,12 +41,27 @@ class ProgrammedDipole:
         """The magnet's centre (rod lengths from the clamp)."""
         return jnp.asarray(self.position)
 
+    def _phi(self, s):
+        return jnp.polyval(jnp.asarray(self.profile)[::-1], s)
+
     def distributed(self, r, d3, s, w):
-        """-M sum_j w_j m_j . b(r_j - c)."""
-        phi = jnp.polyval(jnp.asarray(self.profile)[::-1], s)
+        """-M sum_j w_j m_j . b(r_j - c), m_j = d3 turned by phi(s_j) about e2 (in the
+        plane)."""
+        phi = self._phi(s)
         c, sn = jnp.cos(phi), jnp.sin(phi)
         m = jnp.stack([c * d3[:, 0] + sn * d3[:, 2], d3[:, 1],
                        -sn * d3[:, 0] + c * d3[:, 2]], axis=1)
+        return self._zeeman(r, m, w)
+
+    def framed_distributed(self, r, F, s, w):
+        """The same with m_j = cos(phi) d3 + sin(phi) d1 of the frames F_j = (d1, d2, d3)
+        (n_q, 3, 3) of a rod that carries its frame."""
+        phi = self._phi(s)
+        m = jnp.cos(phi)[:, None] * F[:, :, 2] + jnp.sin(phi)[:, None] * F[:, :, 0]
+        return self._zeeman(r, m, w)
+
+    def _zeeman(self, r, m, w):
+        """-M sum_j w_j m_j . b(r_j - c)."""
         u = self.moment / jnp.linalg.norm(self.moment)
         rho = r - self.position
         dist = jnp.linalg.norm(rho, axis=1)
