@@ -23,11 +23,11 @@ from jaxrod.status import Status
 from jaxrod.twisted.branch_points import TwistBranchPoint, _refine
 from jaxrod.twisted.equations import FLOOR_TOL, _Path, _run_program, _solve_program
 from jaxrod.twisted.folds import refine_fold
-from jaxrod.twisted.rod import INPUTS, TwistedRod, _load_key
+from jaxrod.twisted.rod import TwistedRod
 from jaxrod.twisted.state import TwistState, _states
 
 __all__ = ["TwistBranch", "TwistBranchPoint", "TwistState", "switch_branch", "twist_branch",
-           "twisted_equilibrium"]
+           "twisted_equilibrium", "folds_along"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -102,15 +102,7 @@ def _path(rod: TwistedRod, vary: str, turns: float, to: float) -> _Path:
     turns themselves, or another input scaled to lam in [0, 1]."""
     if vary == "turns":
         return _Path(("turns",), (0.0,), (1.0,))
-    if vary in INPUTS:
-        value = getattr(rod, vary)
-        if value is None:
-            raise ParameterError(f"vary: {vary} is not this rod's control (it has "
-                                 f"{rod.control})")
-    else:
-        name, field, index = _load_key(rod, vary)
-        value = np.asarray(getattr(rod.loads[name], field))
-        value = float(value if index is None else value[index])
+    value = rod.value(vary)
     if to == value:
         raise ParameterError(f"to: must differ from {vary}'s value on the rod ({value:g})")
     return _Path((vary,), (float(value),), (float(to) - float(value),))
@@ -252,6 +244,32 @@ def twisted_equilibrium(rod: TwistedRod, turns: float, *, start: TwistState | No
     state = _states(rod, path, data, full, [res.converged], [res.residual_norm],
                     [res.iterations], [np.sum(np.asarray(eig) < 0)])[0]
     return dataclasses.replace(state, path_tail=float(path_tail))
+
+
+def folds_along(rod: TwistedRod, vary: str, vary_range: tuple[float, float], turns: float,
+                count: int, start: TwistState | None = None, **options: Any
+                ) -> tuple[list, TwistState | None, TwistBranch | None]:
+    """(the converged folds, the state at the range's start, the branch) along ``vary``
+    from ``vary_range[0]`` to ``vary_range[1]``, ending at the ``count``-th fold: the
+    start reached by ``twisted_equilibrium`` (from ``start``, a state at the range's start
+    of a nearby rod, by Newton alone; None: by the rod's own path), the far end at
+    ``turns`` where ``vary`` is another input. No branch (None) where the start fails
+    (its state then not converged, or None where its path stopped short)."""
+    from jaxrod.status import SolverError
+
+    a, b = vary_range
+    try:
+        if vary == "turns":
+            first = twisted_equilibrium(rod, a, start=start)
+        else:
+            first = twisted_equilibrium(rod.replace(vary, a), turns, start=start)
+    except SolverError:
+        return [], None, None
+    if not first.converged:
+        return [], first, None
+    branch = twist_branch(first.rod, b, vary=vary, start=first, turns=first.turns,
+                          **{"max_folds": count, **options})
+    return [f for f in branch.fold_points if f.converged], first, branch
 
 
 def _not_reached(branch: TwistBranch, turns: float) -> Exception:

@@ -217,6 +217,19 @@ class TwistedRod:
         loads[name] = dataclasses.replace(t, **{field: value})
         return dataclasses.replace(self, loads=loads)
 
+    def value(self, key: str) -> float:
+        """The input ``key`` (``INPUTS`` or a load's "term.field[.i]") on this rod;
+        ParameterError naming a key it does not have."""
+        if key in INPUTS:
+            value = getattr(self, key)
+            if value is None:
+                raise ParameterError(f"vary: {key} is not this rod's control (it has "
+                                     f"{self.control})")
+            return float(value)
+        name, field, index = _load_key(self, key)
+        value = np.asarray(getattr(self.loads[name], field))
+        return float(value if index is None else value[index])
+
     def program_loads(self) -> dict:
         """The loads as a program carries them: the rod's, the positions' data
         (``POSITIONS_KEY``) where a load acts on the positions along the rod, and the

@@ -1,0 +1,151 @@
+"""The folds of a twisted rod along one input over a grid of two others: a map.
+
+At every point (x_i, y_j) of the grid the branch along ``vary`` is followed over its range
+(``jaxrod.twisted.branch.folds_along``) to its second fold (or its first, where one is
+all that is asked for): the map holds how many folds it met (0, 1 or 2: two folds bound a
+hysteresis, the range of ``vary`` where two states are stable), the first two folds'
+values and each point's status (SUCCESS where the branch up to its end is resolved). The
+points are visited row by row, each row in the direction the last one ended (a
+serpentine), and each start is solved by Newton from its neighbour's; a point whose start
+fails is solved again by the rod's own path. Every point is one continuation of the same
+compiled program; the inputs are traced, so the grid costs one compilation.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from jaxrod.equilibria.resolution import TOLERANCE
+from jaxrod.params import ParameterError
+from jaxrod.progress import Interrupted, progress_bar
+from jaxrod.solvers.continuation import REACHED_BOUND
+from jaxrod.status import Status
+from jaxrod.twisted.branch import folds_along
+from jaxrod.twisted.rod import TwistedRod
+
+__all__ = ["NOT_COMPUTED", "TwistFoldMap", "twist_fold_map"]
+
+#: A point's status before it is computed.
+NOT_COMPUTED = -1
+
+
+@dataclasses.dataclass(frozen=True)
+class TwistFoldMap:
+    """``count``, ``first``, ``second`` and ``status`` (a ``Status`` value, NOT_COMPUTED
+    where not reached), each (len(y_values), len(x_values)); ``first`` and ``second`` the
+    folds' values of ``vary`` (NaN where fewer were met)."""
+
+    vary: str
+    x: str
+    y: str
+    x_values: np.ndarray
+    y_values: np.ndarray
+    count: np.ndarray
+    first: np.ndarray
+    second: np.ndarray
+    status: np.ndarray
+
+    @property
+    def bistable(self) -> np.ndarray:
+        """Where two folds bound a range of ``vary`` with two stable states."""
+        return self.count >= 2
+
+    @property
+    def failed(self) -> int:
+        """How many computed points are not SUCCESS."""
+        return int(np.sum((self.status != int(Status.SUCCESS))
+                          & (self.status != NOT_COMPUTED)))
+
+    def as_dict(self) -> dict:
+        def values(a):
+            return [[None if math.isnan(v) else float(v) for v in row] for row in a]
+
+        return {"vary": self.vary, "x": self.x, "y": self.y,
+                "x_values": self.x_values.tolist(), "y_values": self.y_values.tolist(),
+                "count": self.count.tolist(), "first": values(self.first),
+                "second": values(self.second),
+                "status": [[Status(s).name.lower() if s != NOT_COMPUTED else "not computed"
+                            for s in row] for row in self.status],
+                "bistable_points": int(np.sum(self.bistable)),
+                "failed_points": self.failed,
+                "not_computed_points": int(np.sum(self.status == NOT_COMPUTED))}
+
+
+def _point_status(folds, branch) -> Status:
+    """SUCCESS where the branch reached the range's end or its second fold, every fold
+    refined and resolved; else why not."""
+    if branch is None:
+        return Status.NOT_CONVERGED
+    if branch.status not in (int(REACHED_BOUND), int(Status.FOLDS_FOUND)):
+        return Status(branch.status)
+    if len(folds) != len(branch.fold_points) or not all(p.converged for p in branch.points):
+        return Status.NOT_CONVERGED
+    tails = [p.tail for p in branch.points] + [f.state.tail for f in folds]
+    return Status.UNDER_RESOLVED if max(tails) > TOLERANCE else Status.SUCCESS
+
+
+def twist_fold_map(rod: TwistedRod, vary: str, vary_range: tuple[float, float], x, y, *,
+                   turns: float = 0.0, folds: int = 2, progress: bool = False, **options
+                   ) -> TwistFoldMap:
+    """The first two folds along ``vary`` (an input of the rod, or "turns") over
+    ``vary_range`` at every point of the grid ``x`` = (key, values) by ``y`` = (key,
+    values) (module docstring); ``turns``: the far end's rotation where neither ``vary``
+    nor an axis is the turns; ``folds``: 1 (the branch ends at its first fold) or 2.
+    ``options`` go to each ``twist_branch``. Ctrl-C raises
+    ``jaxrod.progress.Interrupted`` with the map so far (NOT_COMPUTED where not reached)
+    as ``partial``."""
+    (xk, xs), (yk, ys) = x, y
+    xs, ys = np.atleast_1d(np.asarray(xs, float)), np.atleast_1d(np.asarray(ys, float))
+    keys = {vary, xk, yk}
+    if len(keys) != 3:
+        raise ParameterError(f"x, y: two inputs other than vary ({vary!r}) and each other, "
+                             f"got {xk!r} and {yk!r}")
+    for key in (xk, yk):
+        if key != "turns":
+            rod.value(key)  # names a key the rod does not have
+    if folds not in (1, 2):
+        raise ParameterError(f"folds: 1 or 2 (the folds to look for), got {folds!r}")
+    if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(ys))):
+        raise ParameterError("x, y: finite values")
+    shape = (len(ys), len(xs))
+    count = np.zeros(shape, int)
+    first, second = np.full(shape, np.nan), np.full(shape, np.nan)
+    status = np.full(shape, NOT_COMPUTED)
+
+    def record():
+        return TwistFoldMap(vary, xk, yk, xs, ys, count.copy(), first.copy(), second.copy(),
+                            status.copy())
+
+    bar = progress_bar(count.size, "map", "point", progress)
+    start = None
+    try:
+        for j, yv in enumerate(ys):
+            for i in (range(len(xs)) if j % 2 == 0 else range(len(xs) - 1, -1, -1)):
+                at, t = rod, float(turns)
+                for key, v in ((xk, xs[i]), (yk, yv)):
+                    if key == "turns":
+                        t = float(v)
+                    else:
+                        at = at.replace(key, float(v))
+                found, state, branch = folds_along(at, vary, vary_range, t, folds, start,
+                                                   **options)
+                if branch is None and start is not None:  # again from the rod's own path
+                    found, state, branch = folds_along(at, vary, vary_range, t, folds, None,
+                                                       **options)
+                start = state if state is not None and state.converged else None
+                count[j, i] = len(found)
+                if found:
+                    first[j, i] = found[0].value
+                if len(found) > 1:
+                    second[j, i] = found[1].value
+                status[j, i] = int(_point_status(found, branch))
+                bar.update(1)
+    except KeyboardInterrupt:
+        raise Interrupted(record(), f"after {int(np.sum(status != NOT_COMPUTED))} of "
+                                    f"{count.size} points") from None
+    finally:
+        bar.close()
+    return record()
