@@ -14,6 +14,7 @@ from jaxrod.cli._inputs import (
     add_magnet_inputs,
 )
 from jaxrod.cli._output import _fmt_cusp, _header, _output_dir, _write_fold_curves
+from jaxrod.cli.framed_rod import add_grid_options
 from jaxrod.cli.scene_curves import foldcurve_on_file, map_on_file
 from jaxrod.cli.scene_file import add_scene_file_inputs, uses_scene_file
 from jaxrod.params import (
@@ -214,6 +215,7 @@ def add_map(sub) -> None:
                     "(default 50; 8 with a scene file)")
     mp.add_argument("--quiet", action="store_true", help="no progress bar")
     mp.add_argument("--no-plot", action="store_true", help="skip map.png and the cusp curve")
+    add_grid_options(mp, branch=True)
     mp.add_argument("--coordinator", default=None, help="HOST:PORT of process 0 "
                     "(jax.distributed), for a map over several processes or hosts")
     mp.add_argument("--num-processes", type=int, default=1)

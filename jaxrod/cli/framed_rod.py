@@ -94,6 +94,19 @@ def _degree(args) -> int:
     return PATH_DEGREE if getattr(args, "n_default", True) else args.n
 
 
+def framed_range(args, file) -> tuple[str, float, float, float]:
+    """(the rod's input, start, stop, its factor) of ``--vary KEY --from A --to B``
+    (start and stop in the file's units)."""
+    if getattr(args, "stop", None) is None and getattr(args, "to", None) is not None:
+        args.stop = args.to
+    if args.vary is None or args.start is None or args.stop is None:
+        raise ParameterError("vary: give --vary KEY --from A --to B with a scene file")
+    key, factor = file.input_of(args.vary)
+    if args.start == args.stop:
+        raise ParameterError(f"to: must differ from --from ({args.start:g})")
+    return key, args.start, args.stop, factor
+
+
 def _fields(state, file) -> dict:
     """A state's report, the file's length unit for the far end's position."""
     X, tangent = state.tip_position(), state.tip_tangent()

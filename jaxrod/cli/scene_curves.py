@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 
+from jaxrod.cli.framed_rod import check_grid_options
 from jaxrod.cli.scene_file import _load, _range
 from jaxrod.params import ParameterError
 from jaxrod.status import Status
@@ -21,6 +22,8 @@ def _axis(text: str, what: str, file):
         a, b, count = float(rest[0]), float(rest[1]), int(rest[2])
     except ValueError:
         raise ParameterError(f"{what}: write KEY:START:STOP:COUNT, got {text!r}") from None
+    if file.framed is not None:  # a rod that carries its frame: (its input, factor)
+        return (key, *file.input_of(key, what), np.linspace(a, b, count))
     from jaxrod.scenes.path import along
 
     along(file, (key,))
@@ -102,7 +105,12 @@ def map_on_file(args) -> int:
     from jaxrod.bistability.grid_store import NOT_COMPUTED
     from jaxrod.cli._output import _output_dir
 
-    file = _load(args)
+    file = _load(args, framed=True)
+    check_grid_options(args, file)
+    if file.framed is not None:
+        from jaxrod.cli.framed_analyses import framed_map
+
+        return framed_map(args, file)
     key, start, stop, factor = _range(args, file)
     xk, xs_key, xf, xs = _axis(args.x, "x", file)
     yk, ys_key, yf, ys = _axis(args.y, "y", file)

@@ -124,13 +124,9 @@ def branch_on_file(args) -> int:
     file = _load(args, framed=True)
     check_grid_options(args, file)
     if file.framed is not None:
-        from jaxrod.cli.framed_rod import framed_branch
+        from jaxrod.cli.framed_rod import framed_branch, framed_range
 
-        if args.vary is None or args.start is None or args.stop is None:
-            raise ParameterError("vary: give --vary KEY --from A --to B with a scene file")
-        file.input_of(args.vary)
-        if args.start == args.stop:
-            raise ParameterError(f"to: must differ from --from ({args.start:g})")
+        framed_range(args, file)
         return framed_branch(args, file, args.start, args.stop)
     key, start, stop, factor = _range(args, file)
     from jaxrod.equilibria.resolution import resolved_branch

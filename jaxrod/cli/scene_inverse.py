@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 from jaxrod.cli._inputs import _degree, _float
+from jaxrod.cli.framed_rod import add_grid_options, check_grid_options
 from jaxrod.cli.scene_file import _load, _range, add_scene_file_inputs
 from jaxrod.params import ParameterError
 
@@ -17,8 +18,11 @@ def add_fit_scene_options(ft) -> None:
                     "along --vary, in order (nan: not measured); with --free KEYS")
     ft.add_argument("--sigma", type=_float("sigma", "sigma-deg"), default=None,
                     help="scene file: the folds' standard deviation (--vary's units)")
-    ft.add_argument("--n", type=_degree("N-magnet"), default=16,
-                    help="scene file: Chebyshev degree, 4-64 (default 16)")
+    ft.add_argument("--n", type=_degree("N-magnet"), default=None,
+                    help="scene file: Chebyshev degree, 4-64 (default 16; 48 for a rod that "
+                    "carries its frame, raised while a fold is under-resolved)")
+    add_grid_options(ft)
+    ft.set_defaults(n_fallback=16)
 
 
 def add_design_scene_options(de) -> None:
@@ -122,7 +126,12 @@ def fit_on_file(args) -> int:
     """``jaxrod fit RIG --vary KEY --from A --to B --folds V1 V2 --free K1,K2``."""
     from jaxrod.inverse.scene_fit import fit_folds
 
-    file = _load(args)
+    file = _load(args, framed=True)
+    check_grid_options(args, file)
+    if file.framed is not None:
+        from jaxrod.cli.framed_analyses import framed_fit
+
+        return framed_fit(args, file)
     key, start, stop, factor = _range(args, file)
     if not args.folds:
         raise ParameterError("folds: give the measured fold values (--folds V1 V2 ..., in "

@@ -117,13 +117,16 @@ def _folds_at(rod: TwistedRod, vary: str, vary_range, turns: float, free, p, cou
 
 def fit_twist_folds(rod: TwistedRod, vary: str, vary_range: tuple[float, float], measured,
                     free, sigma: float = 1.0, bounds: dict | None = None, *,
-                    turns: float = 0.0, max_iter: int = 30, **options) -> SceneFit:
+                    turns: float = 0.0, start=None, max_iter: int = 30, **options
+                    ) -> SceneFit:
     """Fit the inputs ``free`` (keys of the rod: "tension" or "shortening" (its control),
     "twist_ratio", "bending_ratio", "load_scale", a load's "term.field[.i]", or "turns"
     where ``vary`` is another input) so that the folds met along ``vary`` from
     ``vary_range[0]`` to ``vary_range[1]`` sit at ``measured`` (in order; NaN: not
     measured), each with standard deviation ``sigma`` (module docstring). ``turns``: the
-    far end's rotation where ``vary`` is not the turns; ``bounds``: key -> (lo, hi);
+    far end's rotation where ``vary`` is not the turns; ``start``: a state at the range's
+    start of a nearby rod (the first evaluation's start is solved from it by Newton; None:
+    by the rod's own path); ``bounds``: key -> (lo, hi);
     ``options`` go to each ``twist_branch`` (``ds_max``, ...). The rod's values are the
     start."""
     measured = np.atleast_1d(np.asarray(measured, float))
@@ -154,7 +157,7 @@ def fit_twist_folds(rod: TwistedRod, vary: str, vary_range: tuple[float, float],
         r = np.where(mask, (values - np.nan_to_num(measured)) / sigma, 0.0)
         return ev, values, r
 
-    at = evaluate(p, None)
+    at = evaluate(p, start)
     if at is None:
         raise ParameterError(f"measured: the branch along {vary} over {list(vary_range)} "
                              f"meets fewer than {count} folds at the start")

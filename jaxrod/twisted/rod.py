@@ -223,8 +223,8 @@ class TwistedRod:
         if key in INPUTS:
             value = getattr(self, key)
             if value is None:
-                raise ParameterError(f"vary: {key} is not this rod's control (it has "
-                                     f"{self.control})")
+                raise ParameterError(f"{key}: not an input of this rod (its far end is "
+                                     f"under {self.control} control)")
             return float(value)
         name, field, index = _load_key(self, key)
         value = np.asarray(getattr(self.loads[name], field))
