@@ -82,7 +82,7 @@ def test_a_map_of_the_fold_over_shortening_and_twist_ratio_is_the_closed_forms()
     1e-10 (measured 2e-14), every point SUCCESS."""
     m = twist_fold_map(_helix_rod(), "turns", (27.0, 39.0), ("shortening", [0.03, 0.032]),
                        ("twist_ratio", [PYELASTICA_GAMMA, 0.62]), folds=1, ds_max=0.5)
-    assert m.failed == 0 and np.all(m.count == 1)
+    assert np.all(m.status == 0) and np.all(m.count == 1)
     for j, gamma in enumerate(m.y_values):
         for i, d in enumerate(m.x_values):
             assert abs(m.first[j, i] / _localised_fold(gamma, d)[0] - 1) <= 1e-10

@@ -55,6 +55,7 @@ def framed_map(args, file) -> int:
     """``jaxrod map RIG --vary KEY --from A --to B --x KEY:A:B:N --y KEY:A:B:N --out DIR``
     on a rod that carries its frame (``jaxrod.twisted.fold_map.twist_fold_map``): map.json
     and map.png in DIR (map.json also when interrupted, with what was computed)."""
+    from jaxrod.bistability.grid_store import NOT_COMPUTED
     from jaxrod.cli._output import _output_dir
     from jaxrod.progress import Interrupted
     from jaxrod.twisted.fold_map import twist_fold_map
@@ -70,9 +71,13 @@ def framed_map(args, file) -> int:
     out_dir = _output_dir(args.out)
 
     def write(m):
-        out = {"rig": args.rig, **m.as_dict(), "vary": key, "x": xk, "y": yk,
-               "x_values": xs.tolist(), "y_values": ys.tolist(), "n": rod.n,
-               "first": _scaled(m.first, factor), "second": _scaled(m.second, factor)}
+        out = {"rig": args.rig, "vary": key, "x": xk, "x_values": xs.tolist(), "y": yk,
+               "y_values": ys.tolist(), "n": rod.n, "count": m.count.tolist(),
+               "first": _scaled(m.first, factor), "second": _scaled(m.second, factor),
+               "status": m.status.tolist(), "bistable_points": int(np.sum(m.bistable)),
+               "failed_points": int(np.sum((m.status != int(Status.SUCCESS))
+                                           & (m.status != NOT_COMPUTED))),
+               "not_computed_points": int(np.sum(m.status == NOT_COMPUTED))}
         (out_dir / "map.json").write_text(json.dumps(out))
         return out
 
@@ -92,7 +97,17 @@ def framed_map(args, file) -> int:
         rod = dataclasses.replace(rod, n=min(2 * rod.n, MOST_DEGREE))
     out = write(m)
     if not args.no_plot:
-        _map_figure(out_dir / "map.png", m, factor, key, xk, yk)
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(6, 4.5))
+        m.plot(ax, factor=factor, label=f"the first fold's {key}")
+        ax.set_xlabel(xk)
+        ax.set_ylabel(yk)
+        fig.savefig(out_dir / "map.png", dpi=120)
+        plt.close(fig)
     summary = {k: out[k] for k in ("vary", "x", "y", "n", "bistable_points", "failed_points")}
     print(json.dumps(summary) if args.json else
           f"{args.rig}: {m.count.size} points (n = {rod.n}), {summary['bistable_points']} "
@@ -103,28 +118,3 @@ def framed_map(args, file) -> int:
 
 def _scaled(a, factor):
     return [[None if np.isnan(v) else float(v / factor) for v in row] for row in a]
-
-
-def _map_figure(path, m, factor, key, xk, yk) -> None:
-    """The first fold's value over the grid, points with two folds ringed, failed ones
-    crossed."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    X, Y = np.meshgrid(m.x_values, m.y_values)
-    shown = ax.scatter(X.ravel(), Y.ravel(), c=(m.first / factor).ravel(), s=60,
-                       cmap="viridis")
-    fig.colorbar(shown, ax=ax, label=f"the first fold's {key}")
-    two = m.bistable.ravel()
-    ax.scatter(X.ravel()[two], Y.ravel()[two], s=140, facecolors="none", edgecolors="k",
-               label="two folds")
-    bad = ((m.status != int(Status.SUCCESS)) & (m.status >= 0)).ravel()
-    ax.scatter(X.ravel()[bad], Y.ravel()[bad], marker="x", c="r", label="failed")
-    ax.set_xlabel(xk)
-    ax.set_ylabel(yk)
-    ax.legend(fontsize=8)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)

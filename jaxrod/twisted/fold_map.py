@@ -13,11 +13,10 @@ compiled program; the inputs are traced, so the grid costs one compilation.
 
 from __future__ import annotations
 
-import dataclasses
-import math
-
 import numpy as np
 
+from jaxrod.bistability.fold_map import FoldMap
+from jaxrod.bistability.grid_store import NOT_COMPUTED
 from jaxrod.equilibria.resolution import TOLERANCE
 from jaxrod.params import ParameterError
 from jaxrod.progress import Interrupted, progress_bar
@@ -26,52 +25,7 @@ from jaxrod.status import Status
 from jaxrod.twisted.branch import folds_along
 from jaxrod.twisted.rod import TwistedRod
 
-__all__ = ["NOT_COMPUTED", "TwistFoldMap", "twist_fold_map"]
-
-#: A point's status before it is computed.
-NOT_COMPUTED = -1
-
-
-@dataclasses.dataclass(frozen=True)
-class TwistFoldMap:
-    """``count``, ``first``, ``second`` and ``status`` (a ``Status`` value, NOT_COMPUTED
-    where not reached), each (len(y_values), len(x_values)); ``first`` and ``second`` the
-    folds' values of ``vary`` (NaN where fewer were met)."""
-
-    vary: str
-    x: str
-    y: str
-    x_values: np.ndarray
-    y_values: np.ndarray
-    count: np.ndarray
-    first: np.ndarray
-    second: np.ndarray
-    status: np.ndarray
-
-    @property
-    def bistable(self) -> np.ndarray:
-        """Where two folds bound a range of ``vary`` with two stable states."""
-        return self.count >= 2
-
-    @property
-    def failed(self) -> int:
-        """How many computed points are not SUCCESS."""
-        return int(np.sum((self.status != int(Status.SUCCESS))
-                          & (self.status != NOT_COMPUTED)))
-
-    def as_dict(self) -> dict:
-        def values(a):
-            return [[None if math.isnan(v) else float(v) for v in row] for row in a]
-
-        return {"vary": self.vary, "x": self.x, "y": self.y,
-                "x_values": self.x_values.tolist(), "y_values": self.y_values.tolist(),
-                "count": self.count.tolist(), "first": values(self.first),
-                "second": values(self.second),
-                "status": [[Status(s).name.lower() if s != NOT_COMPUTED else "not computed"
-                            for s in row] for row in self.status],
-                "bistable_points": int(np.sum(self.bistable)),
-                "failed_points": self.failed,
-                "not_computed_points": int(np.sum(self.status == NOT_COMPUTED))}
+__all__ = ["twist_fold_map"]
 
 
 def _point_status(folds, branch) -> Status:
@@ -89,12 +43,13 @@ def _point_status(folds, branch) -> Status:
 
 def twist_fold_map(rod: TwistedRod, vary: str, vary_range: tuple[float, float], x, y, *,
                    turns: float = 0.0, folds: int = 2, progress: bool = False, **options
-                   ) -> TwistFoldMap:
+                   ) -> FoldMap:
     """The first two folds along ``vary`` (an input of the rod, or "turns") over
     ``vary_range`` at every point of the grid ``x`` = (key, values) by ``y`` = (key,
     values) (module docstring); ``turns``: the far end's rotation where neither ``vary``
     nor an axis is the turns; ``folds``: 1 (the branch ends at its first fold) or 2.
-    ``options`` go to each ``twist_branch``. Ctrl-C raises
+    ``options`` go to each ``twist_branch``. The record is the planar maps'
+    ``jaxrod.bistability.fold_map.FoldMap``. Ctrl-C raises
     ``jaxrod.progress.Interrupted`` with the map so far (NOT_COMPUTED where not reached)
     as ``partial``."""
     (xk, xs), (yk, ys) = x, y
@@ -111,13 +66,13 @@ def twist_fold_map(rod: TwistedRod, vary: str, vary_range: tuple[float, float], 
     if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(ys))):
         raise ParameterError("x, y: finite values")
     shape = (len(ys), len(xs))
-    count = np.zeros(shape, int)
+    count = np.full(shape, NOT_COMPUTED)
     first, second = np.full(shape, np.nan), np.full(shape, np.nan)
     status = np.full(shape, NOT_COMPUTED)
 
     def record():
-        return TwistFoldMap(vary, xk, yk, xs, ys, count.copy(), first.copy(), second.copy(),
-                            status.copy())
+        return FoldMap(vary, tuple(vary_range), xk, xs, yk, ys, count.copy(), first.copy(),
+                       second.copy(), status.copy())
 
     bar = progress_bar(count.size, "map", "point", progress)
     start = None
