@@ -169,10 +169,14 @@ def fit_twist_folds(rod: TwistedRod, vary: str, vary_range: tuple[float, float],
         A, g = J.T @ J, J.T @ r
         scale = np.maximum(np.diag(A), 1e-300)
         try:
+            newton = np.clip(p - np.linalg.solve(A, g), lo, hi)
             step = -np.linalg.solve(A + damping * np.diag(scale), g)
         except np.linalg.LinAlgError:
             reason = "the data do not fix the free inputs (a singular Gauss-Newton matrix)"
             break
+        if np.all(np.abs(newton - p) <= 1e-9 * np.maximum(np.abs(p), 1e-12)):
+            converged = True  # at the minimum: the Gauss-Newton step below the folds'
+            break             # own accuracy
         trial = np.clip(p + step, lo, hi)
         new = evaluate(trial, ev.start)
         if new is None or np.dot(new[2], new[2]) > np.dot(r, r):
@@ -181,17 +185,15 @@ def fit_twist_folds(rod: TwistedRod, vary: str, vary_range: tuple[float, float],
                 reason = "no step lowers chi^2 (the folds fail or leave the range nearby)"
                 break
             continue
-        small = np.all(np.abs(trial - p) <= 1e-9 * np.maximum(np.abs(p), 1e-12))
         p, (ev, values, r) = trial, new
         J = _jacobian(ev, vary, free, mask, sigma)
         damping /= 3.0
-        converged = small or float(np.dot(r, r)) <= 1e-24
+        converged = float(np.dot(r, r)) <= 1e-24
     if not converged and reason is None:
         reason = f"not converged within {max_iter} iterations"
     resolved = all(f.state.status == Status.SUCCESS for f in ev.folds[:count])
     return _record(free, p, J, r, values, measured, mask, sigma, vary_range,
-                   converged and resolved, iterations,
-                   reason if converged or reason else None, resolved)
+                   converged and resolved, iterations, reason, resolved)
 
 
 def _jacobian(ev: _Evaluation, vary, free, mask, sigma) -> np.ndarray:
