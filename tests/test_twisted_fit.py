@@ -1,4 +1,4 @@
-"""Fits and maps of twisted rods (``jaxrod.twisted.fit``, ``jaxrod.twisted.fold_map``): the
+"""Fits and maps of twisted rods (``jaxrod.inverse.twist_fit``, ``jaxrod.twisted.fold_map``): the
 localised helix's fold in end rotation, its sensitivities, a fit and a map, against the
 long-rod closed form; bad inputs."""
 
@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 from test_twisted import PYELASTICA_GAMMA, _localised_fold
 
+from jaxrod.inverse.twist_fit import fit_twist_folds
 from jaxrod.params import ParameterError
 from jaxrod.twisted.branch import twist_branch, twisted_equilibrium
-from jaxrod.twisted.fit import fit_twist_folds, fold_sensitivity
 from jaxrod.twisted.fold_map import twist_fold_map
+from jaxrod.twisted.folds import fold_sensitivity
 from jaxrod.twisted.rod import TwistedRod
 
 

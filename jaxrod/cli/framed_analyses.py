@@ -21,8 +21,8 @@ from jaxrod.status import Status
 
 def framed_fit(args, file) -> int:
     """``jaxrod fit RIG --vary KEY --from A --to B --folds V1 .. --free K1,K2`` on a rod that
-    carries its frame (``jaxrod.twisted.fit.fit_twist_folds``)."""
-    from jaxrod.twisted.fit import fit_twist_folds
+    carries its frame (``jaxrod.inverse.twist_fit.fit_twist_folds``)."""
+    from jaxrod.inverse.twist_fit import fit_twist_folds
 
     if args.folds is None:
         raise ParameterError("folds: give the measured fold values (--folds V1 V2 ..., in "

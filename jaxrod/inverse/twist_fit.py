@@ -1,12 +1,8 @@
 """Fits of a twisted rod's inputs to measured folds, by the folds' exact sensitivities.
 
 A fold of the branch along an input v (the turns, say) moves with any other input p (the
-shortening, the tension, the twist ratio, a load's): at the fold the bordered Hessian J_z of
-the equilibrium equations R(z; v, p) = 0 is singular, with a null vector phi (J_z is
-symmetric: left and right null vectors agree), and differentiating R = 0 along the fold
-curve gives, with R_v and R_p the residual's derivatives in v and p (forward mode),
-
-    dv_fold / dp = -(phi . R_p) / (phi . R_v)        (``fold_sensitivity``).
+shortening, the tension, the twist ratio, a load's), with the exact derivative dv_fold / dp
+from the fold's null vector (``jaxrod.twisted.folds.fold_sensitivity``).
 
 The fit (``fit_twist_folds``) minimises chi^2 = sum_i ((v_i(p) - m_i) / sigma)^2 over the
 free inputs p by Levenberg-Marquardt steps (Gauss-Newton first, damped when a step does
@@ -22,78 +18,16 @@ import dataclasses
 import math
 import types
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from jaxrod.inverse.fit_record import SceneFit, record
 from jaxrod.params import ParameterError
-from jaxrod.programs import jit
 from jaxrod.status import Status
 from jaxrod.twisted.branch import folds_along
-from jaxrod.twisted.equations import _Path, _phase, _residual, _solve_program
-from jaxrod.twisted.folds import TwistFold
+from jaxrod.twisted.folds import fold_sensitivity
 from jaxrod.twisted.rod import TwistedRod
 
-__all__ = ["fit_twist_folds", "fold_sensitivity"]
-
-#: The fold's null direction must stand apart: the next eigenvalue of the bordered Hessian
-#: at least this many times the smallest (else the fold is degenerate, a cusp or a nearly
-#: free slide, and its sensitivity not defined by one null vector).
-NULL_GAP = 1e3
-
-
-def _column(size: int, count: int, keys: tuple, phase: bool, data, w):
-    """dR/d(lam) at w (lam = w[-1]; the path's input at origin + span lam)."""
-    aux = _phase(w[:size], data[0], phase)
-    return jax.jvp(lambda lam: _residual(w.at[-1].set(lam), aux, data, keys, count),
-                   (w[-1],), (jnp.ones_like(w[-1]),))[1]
-
-
-_column_program = jit(_column, static_argnums=(0, 1, 2, 3))
-
-
-def _local(rod: TwistedRod, key: str, turns: float) -> tuple[_Path, float]:
-    """The path of ``key`` through its value on ``rod`` (span 1: lam in the key's units)
-    and lam there."""
-    if key == "turns":
-        return _Path(("turns",), (0.0,), (1.0,)), float(turns)
-    return _Path((key,), (rod.value(key),), (1.0,)), 0.0
-
-
-def fold_sensitivity(fold: TwistFold, vary: str, keys) -> np.ndarray:
-    """d(fold's value of ``vary``)/d(key) for each of ``keys`` (module docstring):
-    ``vary`` the input the fold's branch was followed in, each key an input of the rod
-    ("turns" where ``vary`` is another). Raises ParameterError where the fold's null
-    direction is not isolated (``NULL_GAP``)."""
-    state = fold.state
-    rod, disc = state.rod, state.rod.discretisation()
-    size, count = disc.size, rod.constraints
-    path, lam = _local(rod, vary, state.turns)
-    phase = path.phase(rod)
-    w = np.array(state.w)
-    w[-1] = lam
-    data = path.data(rod, state.turns, disc)
-    _, eig, vec, _ = _solve_program(size, count, path.keys, phase, data, jnp.asarray(w))
-    eig, vec = np.asarray(eig), np.asarray(vec)
-    order = np.argsort(np.abs(eig))
-    if not abs(eig[order[1]]) >= NULL_GAP * abs(eig[order[0]]):
-        raise ParameterError(f"fold at {vary} = {fold.value:.10g}: its null direction is not "
-                             f"isolated (eigenvalues {eig[order[0]]:.2e}, "
-                             f"{eig[order[1]]:.2e}): a degenerate fold, or a localised "
-                             "state's slide (give the rod centred=True)")
-    phi = vec[:, order[0]]
-    r_v = np.asarray(_column_program(size, count, path.keys, phase, data, jnp.asarray(w)))
-    out = []
-    for key in keys:
-        p_path, p_lam = _local(rod, key, state.turns)
-        wp = np.array(state.w)
-        wp[-1] = p_lam
-        r_p = np.asarray(_column_program(size, count, p_path.keys, phase,
-                                         p_path.data(rod, state.turns, disc),
-                                         jnp.asarray(wp)))
-        out.append(-np.dot(phi, r_p[:len(phi)]) / np.dot(phi, r_v[:len(phi)]))
-    return np.array(out)
+__all__ = ["fit_twist_folds"]
 
 
 @dataclasses.dataclass
