@@ -154,6 +154,9 @@ API: dict[str, dict[str, tuple[str, str]]] = {
         "switch_branch": ("jaxrod.twisted.branch", "switch_branch"),
         "twist_fold_curve": ("jaxrod.twisted.fold_curve", "twist_fold_curve"),
         "TwistFoldCurve": ("jaxrod.twisted.fold_curve", "TwistFoldCurve"),
+        "fold_sensitivity": ("jaxrod.twisted.folds", "fold_sensitivity"),
+        "fit_twist_folds": ("jaxrod.inverse.twist_fit", "fit_twist_folds"),
+        "twist_fold_map": ("jaxrod.twisted.fold_map", "twist_fold_map"),
     },
     "Fold curves, the cusp and design maps": {
         "fold_curves": ("jaxrod.bistability.fold_curves", "fold_curves"),
