@@ -127,7 +127,8 @@ def test_fit_and_map_of_a_framed_cantilever_from_the_command_line(tmp_path):
     against the planar engine (``jaxrod folds``, an independent discretisation):
     ``jaxrod fit`` from B = 1.3 mT to the planar folds at 1.25 mT recovers 1.25 mT to 1e-9;
     ``jaxrod map`` over B = 1.25 and 1.4 mT gives both folds at each B to 1e-8 degrees,
-    with map.json and map.png."""
+    with map.json and map.png; ``jaxrod foldcurve`` along B (two points) the first fold
+    at each to 1e-8 degrees."""
     import json
     from pathlib import Path
 
@@ -164,3 +165,9 @@ def test_fit_and_map_of_a_framed_cantilever_from_the_command_line(tmp_path):
         assert abs(m["first"][0][i] - ref[0]) <= 1e-8
         assert abs(m["second"][0][i] - ref[1]) <= 1e-8
     assert (tmp_path / "map" / "map.png").exists()
+    proc = run_cli("foldcurve", rig, *span, "--along", "field.0.B",
+                   "--along-to", "1.4e-3", "--points", "2", "--n", "24", "--json")
+    assert proc.returncode == 0, proc.stderr + proc.stdout
+    curve = json.loads(proc.stdout)
+    assert curve["converged"] and curve["along_values"] == [1.25e-3, 1.4e-3]
+    assert max(abs(v - ref[0]) for v, ref in zip(curve["values"], (at, above))) <= 1e-8

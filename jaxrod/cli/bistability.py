@@ -197,6 +197,10 @@ def add_foldcurve(sub) -> None:
                     help="scene file: where the curve ends in --along")
     fc.add_argument("--which", type=int, default=0, help="scene file: which fold along "
                     "--vary (0: the first met)")
+    fc.add_argument("--points", type=int, default=None, help="a rod that carries its frame: "
+                    "the values of --along, evenly spaced from the file's value to --along-to "
+                    "(default 11)")
+    add_grid_options(fc)
     fc.add_argument("--out", default=None, help="directory for foldcurve.csv/.json/.png")
     fc.set_defaults(func=cmd_foldcurve)
 

@@ -1,8 +1,8 @@
-"""``jaxrod fit RIG`` and ``jaxrod map RIG`` for a rod that carries its frame
+"""``jaxrod fit | foldcurve | map RIG`` for a rod that carries its frame
 (``jaxrod.twisted``): its inputs fitted to measured folds along one of its inputs (the end
-rotation, say), and the folds over a grid of two of its inputs. Each is done at the
-command's degree, then again at twice the degree while a fold (or a point of a map's
-branches) is under-resolved (``MOST_DEGREE`` at most)."""
+rotation, say), a fold's curve in a second input, and the folds over a grid of two. Each is
+done at the command's degree, then again at twice the degree while a fold (or a point of
+the branches) is under-resolved (``MOST_DEGREE`` at most)."""
 
 from __future__ import annotations
 
@@ -51,6 +51,66 @@ def framed_fit(args, file) -> int:
     return _report(args, file, keys, free, fit, factor, "fit")
 
 
+def _resolved_map(rod, *args, **kwargs):
+    """(``twist_fold_map`` at the rod's degree, then at twice it while a point is
+    under-resolved, the rod of the last)."""
+    from jaxrod.twisted.fold_map import twist_fold_map
+
+    while True:
+        m = twist_fold_map(rod, *args, **kwargs)
+        if not np.any(m.status == int(Status.UNDER_RESOLVED)) or rod.n >= MOST_DEGREE:
+            return m, rod
+        rod = dataclasses.replace(rod, n=min(2 * rod.n, MOST_DEGREE))
+
+
+def framed_foldcurve(args, file) -> int:
+    """``jaxrod foldcurve RIG --vary KEY --from A --to B --along KEY2 --along-to C`` on a
+    rod that carries its frame: the fold ``--which`` (0: the first met, or 1) along KEY at
+    ``--points`` values of KEY2 evenly spaced from the file's value to C, each start solved
+    from the last (``twist_fold_map`` along one axis)."""
+    from jaxrod.cli.scene_curves import _curve_figure
+
+    vary, start, stop, factor = framed_range(args, file)
+    if args.along is None or args.along_to is None:
+        raise ParameterError("along: give --along KEY --along-to VALUE with a scene file")
+    along, a_factor = file.input_of(args.along, "along")
+    if args.which not in (0, 1):
+        raise ParameterError(f"which: 0 or 1 for a rod that carries its frame, got "
+                             f"{args.which}")
+    points = 11 if args.points is None else args.points
+    if points < 2:
+        raise ParameterError(f"points: at least 2, got {points}")
+    values = np.linspace(file.value(args.along), args.along_to, points)
+    m, rod = _resolved_map(twisted_rod(file, _degree(args), args), vary,
+                           (factor * start, factor * stop), (along, a_factor * values), None,
+                           turns=file.framed.turns, folds=args.which + 1)
+    fold = (m.first if args.which == 0 else m.second)[0] / factor
+    status = [Status(int(v)) if v >= 0 else Status.NOT_CONVERGED for v in m.status[0]]
+    status = [s if s != Status.SUCCESS or c > args.which else Status.FOLD_OUT_OF_RANGE
+              for s, c in zip(status, m.count[0])]
+    overall = next((s for s in status if s != Status.SUCCESS), Status.SUCCESS)
+    out = {"vary": args.vary, "along": args.along, "along_values": values.tolist(),
+           "values": [None if np.isnan(v) else float(v) for v in fold],
+           "curve_status": [s.name.lower() for s in status], "cusps": [], "ends": [],
+           "status": overall.name.lower(), "converged": overall == Status.SUCCESS,
+           "n": rod.n}
+    if args.out:
+        from jaxrod.cli._output import _output_dir
+
+        out_dir = _output_dir(args.out)
+        (out_dir / "foldcurve.json").write_text(json.dumps(out, indent=1))
+        _curve_figure(out_dir / "foldcurve.png", out, args)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"{args.rig}: the fold in {args.vary} at {points} values of {args.along} "
+              f"(n = {rod.n})")
+        for a, v, s in zip(values, out["values"], status):
+            print(f"  {args.along} = {a:.8g}: {args.vary} = "
+                  + (f"{v:.10g}" if v is not None else "none") + f" ({s})")
+    return 0 if out["converged"] else 1
+
+
 def framed_map(args, file) -> int:
     """``jaxrod map RIG --vary KEY --from A --to B --x KEY:A:B:N --y KEY:A:B:N --out DIR``
     on a rod that carries its frame (``jaxrod.twisted.fold_map.twist_fold_map``): map.json
@@ -58,7 +118,6 @@ def framed_map(args, file) -> int:
     from jaxrod.bistability.grid_store import NOT_COMPUTED
     from jaxrod.cli._output import _output_dir
     from jaxrod.progress import Interrupted
-    from jaxrod.twisted.fold_map import twist_fold_map
 
     vary, start, stop, factor = framed_range(args, file)
     key = args.vary
@@ -81,20 +140,15 @@ def framed_map(args, file) -> int:
         (out_dir / "map.json").write_text(json.dumps(out))
         return out
 
-    while True:
-        try:
-            m = twist_fold_map(rod, vary, (factor * start, factor * stop), (xs_key, xf * xs),
+    try:
+        m, rod = _resolved_map(rod, vary, (factor * start, factor * stop), (xs_key, xf * xs),
                                (ys_key, yf * ys), turns=file.framed.turns, folds=folds,
                                progress=not args.quiet)
-        except Interrupted as err:
-            write(err.partial)
-            print(f"jaxrod map: interrupted {err.where}; wrote what was computed to "
-                  f"{out_dir / 'map.json'}", file=sys.stderr)
-            return 130
-        resolved = not np.any(m.status == int(Status.UNDER_RESOLVED))
-        if resolved or rod.n >= MOST_DEGREE:
-            break
-        rod = dataclasses.replace(rod, n=min(2 * rod.n, MOST_DEGREE))
+    except Interrupted as err:
+        write(err.partial)
+        print(f"jaxrod map: interrupted {err.where}; wrote what was computed to "
+              f"{out_dir / 'map.json'}", file=sys.stderr)
+        return 130
     out = write(m)
     if not args.no_plot:
         import matplotlib

@@ -36,7 +36,15 @@ def foldcurve_on_file(args) -> int:
     file's value to C, with the cusps it passes."""
     import jaxrod as jr
 
-    file = _load(args)
+    file = _load(args, framed=True)
+    check_grid_options(args, file)
+    if file.framed is not None:
+        from jaxrod.cli.framed_analyses import framed_foldcurve
+
+        return framed_foldcurve(args, file)
+    if args.points is not None:
+        raise ParameterError("points: only for a rod that carries its frame (a fold curve of "
+                             "any other rig is continued, not sampled)")
     key, start, stop, factor = _range(args, file)
     if args.along is None or args.along_to is None:
         raise ParameterError("along: give --along KEY --along-to VALUE with a scene file")

@@ -46,19 +46,20 @@ def twist_fold_map(rod: TwistedRod, vary: str, vary_range: tuple[float, float], 
                    ) -> FoldMap:
     """The first two folds along ``vary`` (an input of the rod, or "turns") over
     ``vary_range`` at every point of the grid ``x`` = (key, values) by ``y`` = (key,
-    values) (module docstring); ``turns``: the far end's rotation where neither ``vary``
+    values) (module docstring), or along ``x`` alone where ``y`` is None (one row: the
+    folds' curve in x); ``turns``: the far end's rotation where neither ``vary``
     nor an axis is the turns; ``folds``: 1 (the branch ends at its first fold) or 2.
     ``options`` go to each ``twist_branch``. The record is the planar maps'
     ``jaxrod.bistability.fold_map.FoldMap``. Ctrl-C raises
     ``jaxrod.progress.Interrupted`` with the map so far (NOT_COMPUTED where not reached)
     as ``partial``."""
-    (xk, xs), (yk, ys) = x, y
+    (xk, xs), (yk, ys) = x, (None, [0.0]) if y is None else y
     xs, ys = np.atleast_1d(np.asarray(xs, float)), np.atleast_1d(np.asarray(ys, float))
-    keys = {vary, xk, yk}
-    if len(keys) != 3:
-        raise ParameterError(f"x, y: two inputs other than vary ({vary!r}) and each other, "
+    axes = [k for k in (xk, yk) if k is not None]
+    if len({vary, *axes}) != 1 + len(axes):
+        raise ParameterError(f"x, y: inputs other than vary ({vary!r}) and each other, "
                              f"got {xk!r} and {yk!r}")
-    for key in (xk, yk):
+    for key in axes:
         if key != "turns":
             rod.value(key)  # names a key the rod does not have
     if folds not in (1, 2):
@@ -81,6 +82,8 @@ def twist_fold_map(rod: TwistedRod, vary: str, vary_range: tuple[float, float], 
             for i in (range(len(xs)) if j % 2 == 0 else range(len(xs) - 1, -1, -1)):
                 at, t = rod, float(turns)
                 for key, v in ((xk, xs[i]), (yk, yv)):
+                    if key is None:
+                        continue
                     if key == "turns":
                         t = float(v)
                     else:
