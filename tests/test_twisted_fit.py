@@ -124,7 +124,8 @@ def test_a_maps_bad_inputs_are_named(x, y, folds, name):
 def test_fit_and_map_of_a_framed_cantilever_from_the_command_line(tmp_path):
     """The shipped hard-magnetic cantilever as a rod that carries its frame (3D, its
     remanence programmed at 0 degrees), its field turned from 90 to 300 degrees, n = 24,
-    against the planar engine (``jaxrod folds``, an independent discretisation):
+    against the planar engine (``jaxrod folds``, an independent discretisation): ``jaxrod
+    folds`` of the framed file gives the planar folds to 1e-8 degrees;
     ``jaxrod fit`` from B = 1.3 mT to the planar folds at 1.25 mT recovers 1.25 mT to 1e-9;
     ``jaxrod map`` over B = 1.25 and 1.4 mT gives both folds at each B to 1e-8 degrees,
     with map.json and map.png; ``jaxrod foldcurve`` along B (two points) the first fold
@@ -150,6 +151,10 @@ def test_fit_and_map_of_a_framed_cantilever_from_the_command_line(tmp_path):
 
     at, above = planar(1.25e-3), planar(1.4e-3)
     assert len(at) == len(above) == 2
+    proc = run_cli("folds", rig, *span, "--n", "24", "--json")
+    assert proc.returncode == 0, proc.stderr + proc.stdout
+    folds = [f["value"] for f in json.loads(proc.stdout)["folds"]]
+    assert len(folds) == 2 and max(abs(a - b) for a, b in zip(folds, at)) <= 1e-8
     proc = run_cli("fit", rig, *span, "--set", "field.0.B=1.3e-3", "--free", "field.0.B",
                    "--folds", *map(str, at), "--sigma", "0.1", "--n", "24", "--json")
     assert proc.returncode == 0, proc.stderr + proc.stdout

@@ -220,6 +220,7 @@ def add_folds(sub) -> None:
     add_scene_file_inputs(f, vary=True)
     add_magnet_inputs(f)
     f.add_argument("--method", choices=["moore-spence", "reduced"], default="moore-spence")
+    add_grid_options(f, branch=True)
     f.set_defaults(func=cmd_folds)
 
 

@@ -242,10 +242,17 @@ def _fold(f, factor, file) -> dict:
 
 def folds_on_file(args) -> int:
     """``jaxrod folds RIG --vary KEY --from A --to B``: the folds met along the path, in
-    order."""
+    order (a rod that carries its frame: ``jaxrod branch``'s report, its ``folds`` among
+    it)."""
     from jaxrod.equilibria.resolution import resolved_branch
 
-    file = _load(args)
+    file = _load(args, framed=True)
+    check_grid_options(args, file)
+    if file.framed is not None:  # its branch, with the folds refined on it
+        from jaxrod.cli.framed_rod import framed_branch, framed_range
+
+        framed_range(args, file)
+        return framed_branch(args, file, args.start, args.stop)
     key, start, stop, factor = _range(args, file)
     r = resolved_branch(file, key, start, stop, n=args.n, points=False)
     out = {"vary": args.vary, "folds": [_fold(f, factor, file) for f in r.folds],

@@ -472,6 +472,6 @@ def load(path: str | Path, settings: list[str] = (), framed: bool = False) -> Fi
     if file.framed is not None and not framed:
         raise ParameterError("rod.support: a rod that carries its frame (held at both ends, "
                              "or a 3D rod programmed at an angle) is taken by jaxrod "
-                             "equilibrium, branch, fit, foldcurve and map, not by "
-                             "this command")
+                             "equilibrium, branch, folds, fit, foldcurve and map, "
+                             "not by this command")
     return file
