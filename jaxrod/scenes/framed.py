@@ -19,8 +19,9 @@ class FramedSpec:
     """support ("clamped-clamped" or "clamped"), twist_ratio (C / B, None: the rod's
     default), bending_ratio (B2 / B1), held at both ends exactly one of tension (T L^2 / B)
     and shortening, the far end's turns, and the loads (scene terms by name, the rod's
-    bending excluded), and contact_diameter (the rod's diameter in L where its strands may
-    not pass through each other: ``TwistedRod.contact_diameter``; None: they may)."""
+    uniform bending excluded, a taper among them), and contact_diameter (the rod's
+    diameter in L where its strands may not pass through each other:
+    ``TwistedRod.contact_diameter``; None: they may)."""
 
     support: str
     twist_ratio: float | None
@@ -48,9 +49,6 @@ def framed_spec(terms: dict, inputs: dict, tables: dict, per_tension: float,
     of the file's tension (L^2 / (E I) in SI, 1 nondimensional); ``length``: the file's
     unit of length per rod length (L in SI, 1 nondimensional)."""
     rod, ends = tables["rod"], tables["ends"]
-    if isinstance(terms["bending"], TaperedBending):
-        fail("rod.stiffness_profile", "a rod that carries its frame is uniform (no taper "
-                                      "yet)")
     ratios = {}
     for key in ("twist_ratio", "bending_ratio"):
         if key in rod:
@@ -75,7 +73,9 @@ def framed_spec(terms: dict, inputs: dict, tables: dict, per_tension: float,
         inputs["ends.shortening"] = ("shortening", 1.0)
     if support != "clamped":
         inputs["ends.rotation_turns"] = ("turns", 1.0)
-    loads = {name: t for name, t in terms.items() if name != "bending"}
+    # the loads, and a taper (its stiffnesses scaled along the rod)
+    loads = {name: t for name, t in terms.items()
+             if name != "bending" or isinstance(t, TaperedBending)}
     contact = None
     if "contact_diameter" in rod:
         contact = number(rod, "contact_diameter", "rod.") / length

@@ -290,12 +290,14 @@ class _Path:
     def phase(self, rod: TwistedRod) -> bool:
         """Whether the phase condition is on along the whole path: a symmetric rod
         (``TwistedRod.symmetric``) and a path that keeps it (the turns, the end's control,
-        the twist ratio, the load scale or a load's strength; a field's angle or the
+        the twist ratio, the load scale, a load's strength or a taper's coefficients; a
+        field's angle or the
         bending ratio would break it part way, where a phase condition would force
         states that are no equilibria)."""
         keeps = ("turns", "tension", "shortening", "twist_ratio", "load_scale")
         return rod.symmetric and all(
             k in keeps or (k.count(".") == 1 and k.split(".")[1] in _STRENGTHS)
+            or getattr(rod.loads.get(k.split(".")[0]), "elastic", False)
             for k in self.keys)
 
 

@@ -158,9 +158,11 @@ class TwistedRod:
         if not isinstance(self.loads, dict):
             raise ParameterError("loads: a dict of scene terms by name")
         for name, t in self.loads.items():
-            if not hasattr(t, "term_name") or getattr(t, "elastic", False):
+            if not hasattr(t, "term_name") or (getattr(t, "elastic", False)
+                                               and t.term_name != "tapered_bending"):
                 raise ParameterError(f"loads: {name!r} is not a load term of "
-                                     "jaxrod.scenes.terms (the rod's own energy is built in)")
+                                     "jaxrod.scenes.terms (the rod's own energy is built in; "
+                                     "a taper is a TaperedBending among the loads)")
             if t.distributed is not None and not acts_on_positions(t):
                 raise ParameterError(f"loads: {name!r} ({t.term_name}) acts on the positions "
                                      "along the rod with no form for a rod that carries its "
@@ -260,6 +262,8 @@ INPUTS = ("twist_ratio", "bending_ratio", "tension", "shortening", "load_scale")
 def _axial(t) -> bool:
     """Whether the load term ``t`` is unchanged by rotations about e3 (concrete inputs)."""
     name = t.term_name
+    if name == "tapered_bending":  # a section that changes along the rod, round at every s
+        return True
     if name in ("gravity", "anisotropy"):
         d = np.asarray(t.direction, float)
         return bool(abs(d[0]) + abs(d[1]) == 0.0)
@@ -299,13 +303,19 @@ def framed_jet3(a):
 
 def density(a, s, inputs, loads: dict) -> jax.Array:
     """The energy density at one node of jet a and arclength s: the rod's own
-    (u1^2 + beta u2^2 + gamma u3^2) / 2 - t d3 . e3, plus every load's density, written in
+    f(s) (u1^2 + beta u2^2 + gamma u3^2) / 2 - t d3 . e3 (f = E I(s) / E I of a taper, a
+    ``TaperedBending`` among the loads: the section's three stiffnesses scale alike, as a
+    round section's I and J do; else 1), plus every load's density, written in
     the director (d3, d3') or, where the term has a ``framed`` form (a remanence at an angle
     in the material frame), in the frame."""
     gamma, beta, tension, scale = inputs[0], inputs[1], inputs[2], inputs[4]
     F, dF, u = framed_jet3(a)
-    e = 0.5 * (u[0] ** 2 + beta * u[1] ** 2 + gamma * u[2] ** 2) - tension * F[2, 2]
+    taper = [t.relative(s) for t in loads.values() if getattr(t, "elastic", False)]
+    e = (0.5 * (taper[0] if taper else 1.0)
+         * (u[0] ** 2 + beta * u[1] ** 2 + gamma * u[2] ** 2) - tension * F[2, 2])
     for t in loads.values():
+        if getattr(t, "elastic", False):
+            continue
         if getattr(t, "framed", None) is not None:
             e = e + scale * t.framed(F, dF, s)
         elif t.density is not None:

@@ -24,9 +24,13 @@ class TaperedBending:
 
     stiffness: jax.Array = dataclasses.field(default_factory=lambda: jnp.ones(1))
 
+    def relative(self, s):
+        """beta(s) = E I(s) / E I."""
+        return chebyshev_series(self.stiffness, s)
+
     def density(self, d3, dd3, s):
-        return 0.5 * chebyshev_series(self.stiffness, s) * jnp.dot(dd3, dd3)
+        return 0.5 * self.relative(s) * jnp.dot(dd3, dd3)
 
     def planar(self, theta, dtheta, s):
         """The density on the planar rod: beta(s) theta'^2 / 2."""
-        return 0.5 * chebyshev_series(self.stiffness, s) * dtheta**2
+        return 0.5 * self.relative(s) * dtheta**2
