@@ -13,7 +13,7 @@ import sys
 import numpy as np
 
 from jaxrod.cli.framed_rod import MOST_DEGREE, _degree, framed_range, twisted_rod
-from jaxrod.cli.scene_curves import _axis
+from jaxrod.cli.scene_curves import _axis, map_fields, map_figure
 from jaxrod.cli.scene_inverse import _free_and_bounds, _report
 from jaxrod.params import ParameterError
 from jaxrod.status import Status
@@ -68,7 +68,7 @@ def framed_foldcurve(args, file) -> int:
     rod that carries its frame: the fold ``--which`` (0: the first met, or 1) along KEY at
     ``--points`` values of KEY2 evenly spaced from the file's value to C, each start solved
     from the last (``twist_fold_map`` along one axis)."""
-    from jaxrod.cli.scene_curves import _curve_figure
+    from jaxrod.cli.scene_curves import write_curve
 
     vary, start, stop, factor = framed_range(args, file)
     if args.along is None or args.along_to is None:
@@ -94,15 +94,7 @@ def framed_foldcurve(args, file) -> int:
            "curve_status": [s.name.lower() for s in status], "cusps": [], "ends": [],
            "status": overall.name.lower(), "converged": overall == Status.SUCCESS,
            "n": rod.n}
-    if args.out:
-        from jaxrod.cli._output import _output_dir
-
-        out_dir = _output_dir(args.out)
-        (out_dir / "foldcurve.json").write_text(json.dumps(out, indent=1))
-        _curve_figure(out_dir / "foldcurve.png", out, args)
-    if args.json:
-        print(json.dumps(out))
-    else:
+    if not write_curve(args, out):
         print(f"{args.rig}: the fold in {args.vary} at {points} values of {args.along} "
               f"(n = {rod.n})")
         for a, v, s in zip(values, out["values"], status):
@@ -115,7 +107,6 @@ def framed_map(args, file) -> int:
     """``jaxrod map RIG --vary KEY --from A --to B --x KEY:A:B:N --y KEY:A:B:N --out DIR``
     on a rod that carries its frame (``jaxrod.twisted.fold_map.twist_fold_map``): map.json
     and map.png in DIR (map.json also when interrupted, with what was computed)."""
-    from jaxrod.bistability.grid_store import NOT_COMPUTED
     from jaxrod.cli._output import _output_dir
     from jaxrod.progress import Interrupted
 
@@ -131,12 +122,7 @@ def framed_map(args, file) -> int:
 
     def write(m):
         out = {"rig": args.rig, "vary": key, "x": xk, "x_values": xs.tolist(), "y": yk,
-               "y_values": ys.tolist(), "n": rod.n, "count": m.count.tolist(),
-               "first": _scaled(m.first, factor), "second": _scaled(m.second, factor),
-               "status": m.status.tolist(), "bistable_points": int(np.sum(m.bistable)),
-               "failed_points": int(np.sum((m.status != int(Status.SUCCESS))
-                                           & (m.status != NOT_COMPUTED))),
-               "not_computed_points": int(np.sum(m.status == NOT_COMPUTED))}
+               "y_values": ys.tolist(), "n": rod.n, **map_fields(m, factor)}
         (out_dir / "map.json").write_text(json.dumps(out))
         return out
 
@@ -151,17 +137,7 @@ def framed_map(args, file) -> int:
         return 130
     out = write(m)
     if not args.no_plot:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, ax = plt.subplots(figsize=(6, 4.5))
-        m.plot(ax, factor=factor, label=f"the first fold's {key}")
-        ax.set_xlabel(xk)
-        ax.set_ylabel(yk)
-        fig.savefig(out_dir / "map.png", dpi=120)
-        plt.close(fig)
+        map_figure(out_dir / "map.png", m, factor, key, xk, yk)
     summary = {k: out[k] for k in ("vary", "x", "y", "n", "bistable_points", "failed_points")}
     print(json.dumps(summary) if args.json else
           f"{args.rig}: {m.count.size} points (n = {rod.n}), {summary['bistable_points']} "
@@ -169,6 +145,3 @@ def framed_map(args, file) -> int:
           f"{out_dir / 'map.json'}")
     return 0 if out["failed_points"] == 0 else 1
 
-
-def _scaled(a, factor):
-    return [[None if np.isnan(v) else float(v / factor) for v in row] for row in a]

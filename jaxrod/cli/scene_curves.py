@@ -65,6 +65,18 @@ def foldcurve_on_file(args) -> int:
            "ends": [c for c in special if c["kind"] == "end"],
            "curve_status": [s.name.lower() for s in curve.status],
            "status": status.name.lower(), "converged": status == Status.SUCCESS}
+    if not write_curve(args, out):
+        print(f"{args.rig}: the fold in {args.vary} followed in {args.along} over "
+              f"{len(curve.values)} points ({', '.join(str(s) for s in curve.status)})")
+        for c in special:
+            print(f"  {c['kind']} at {args.along} = {c['along']:.8g}, {args.vary} = "
+                  f"{c['value']:.8g}")
+    return 0 if out["converged"] else 1
+
+
+def write_curve(args, out: dict) -> bool:
+    """foldcurve.json and foldcurve.png in ``--out`` (where given); ``out`` printed as JSON
+    with ``--json`` (True), else nothing printed (False: the caller's text follows)."""
     if args.out:
         from jaxrod.cli._output import _output_dir
 
@@ -73,13 +85,7 @@ def foldcurve_on_file(args) -> int:
         _curve_figure(out_dir / "foldcurve.png", out, args)
     if args.json:
         print(json.dumps(out))
-    else:
-        print(f"{args.rig}: the fold in {args.vary} followed in {args.along} over "
-              f"{len(curve.values)} points ({', '.join(str(s) for s in curve.status)})")
-        for c in special:
-            print(f"  {c['kind']} at {args.along} = {c['along']:.8g}, {args.vary} = "
-                  f"{c['value']:.8g}")
-    return 0 if out["converged"] else 1
+    return bool(args.json)
 
 
 def _curve_figure(path, out, args) -> None:
@@ -110,7 +116,6 @@ def map_on_file(args) -> int:
 
     import jaxrod as jr
     from jaxrod.bistability.fold_map import read_fold_map
-    from jaxrod.bistability.grid_store import NOT_COMPUTED
     from jaxrod.cli._output import _output_dir
 
     file = _load(args, framed=True)
@@ -134,26 +139,12 @@ def map_on_file(args) -> int:
     if jax.process_index() != 0:
         return 0
     m = read_fold_map(store)
-    missing = int(np.sum(m.status == NOT_COMPUTED))
     out = {"vary": args.vary, "x": xk, "x_values": xs.tolist(), "y": yk,
-           "y_values": ys.tolist(), "count": m.count.tolist(),
-           "first": np.where(np.isnan(m.first), None, m.first / factor).tolist(),
-           "second": np.where(np.isnan(m.second), None, m.second / factor).tolist(),
-           "status": m.status.tolist(), "bistable_points": int(np.sum(m.bistable)),
-           "failed_points": int(np.sum((m.status != 0) & (m.status != NOT_COMPUTED))),
-           "not_computed_points": missing, "store": str(store)}
+           "y_values": ys.tolist(), **map_fields(m, factor), "store": str(store)}
+    missing = out["not_computed_points"]
     (out_dir / "map.json").write_text(json.dumps(out))
     if not args.no_plot:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, ax = plt.subplots(figsize=(6, 4.5))
-        m.plot(ax, factor=factor, label=f"the first fold's {args.vary}")
-        ax.set_xlabel(xk)
-        ax.set_ylabel(yk)
-        fig.savefig(out_dir / "map.png", dpi=120)
+        map_figure(out_dir / "map.png", m, factor, args.vary, xk, yk)
     summary = {k: out[k] for k in ("vary", "x", "y", "bistable_points", "failed_points",
                                    "not_computed_points", "store")}
     print(json.dumps(summary) if args.json else
@@ -162,3 +153,31 @@ def map_on_file(args) -> int:
           + (f", {missing} not computed yet (other processes)" if missing else "")
           + f"; wrote {out_dir / 'map.json'} and the store {store}")
     return 0 if out["failed_points"] == 0 else 1
+
+
+def map_fields(m, factor: float) -> dict:
+    """A ``FoldMap``'s points for map.json: the counts, the folds' values divided by
+    ``factor`` (None where fewer), the statuses and the tallies."""
+    from jaxrod.bistability.grid_store import NOT_COMPUTED
+
+    return {"count": m.count.tolist(),
+            "first": np.where(np.isnan(m.first), None, m.first / factor).tolist(),
+            "second": np.where(np.isnan(m.second), None, m.second / factor).tolist(),
+            "status": m.status.tolist(), "bistable_points": int(np.sum(m.bistable)),
+            "failed_points": int(np.sum((m.status != 0) & (m.status != NOT_COMPUTED))),
+            "not_computed_points": int(np.sum(m.status == NOT_COMPUTED))}
+
+
+def map_figure(path, m, factor: float, vary: str, xk: str, yk: str) -> None:
+    """map.png: the first fold's value over the grid (``FoldMap.plot``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    m.plot(ax, factor=factor, label=f"the first fold's {vary}")
+    ax.set_xlabel(xk)
+    ax.set_ylabel(yk)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
