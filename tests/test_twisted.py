@@ -21,6 +21,7 @@ import pytest
 
 from jaxrod.discretise.framed import framed_jet
 from jaxrod.params import ParameterError
+from jaxrod.scenes.terms import TaperedBending
 from jaxrod.twisted.branch import twist_branch, twisted_equilibrium
 from jaxrod.twisted.rod import TwistedRod
 
@@ -48,6 +49,7 @@ shortening = 0.03
     (dict(shortening=0.0), "shortening"),
     (dict(tension=float("inf")), "tension"),
     (dict(shortening=0.1, n=6), "n"),
+    (dict(shortening=0.1, loads={"a": TaperedBending(), "b": TaperedBending()}), "loads"),
 ])
 def test_bad_inputs_are_named(kwargs, name):
     with pytest.raises(ParameterError, match=f"^{name}:"):

@@ -36,8 +36,7 @@ def framed_fit(args, file) -> int:
         fit = fit_twist_folds(rod, vary, (factor * start, factor * stop),
                               [factor * v for v in args.folds], [s for s, _ in free],
                               sigma * abs(factor), bounds, turns=turns)
-        if fit.converged or rod.n >= MOST_DEGREE or "under-resolved" not in (fit.reason
-                                                                               or ""):
+        if fit.status != Status.UNDER_RESOLVED or rod.n >= MOST_DEGREE:
             break
         # again at twice the degree, from the estimates
         for name, value in fit.estimates.items():

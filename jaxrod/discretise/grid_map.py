@@ -16,9 +16,11 @@ map tends to the identity; ``layer_width`` = None is the plain grid.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
+from jaxrod import spectral
 from jaxrod.params import ParameterError
 
 
@@ -62,3 +64,12 @@ def grid_coordinate(s, layer_width: float | None) -> np.ndarray:
         return s
     a = _rate(layer_width)
     return np.clip(0.5 * (1.0 + np.arcsinh((s - 0.5) / layer_width) / a), 0.0, 1.0)
+
+
+@lru_cache(maxsize=32)
+def cumulative_integration(degree: int, layer_width: float | None) -> np.ndarray:
+    """(C f)_j = int_0^{s_j} f ds at the nodes of the degree-``degree`` Chebyshev grid
+    mapped by ``layer_width``: the plain grid's matrix in xi, each column times ds / dxi
+    (cached: not to be written to)."""
+    xi = spectral.chebyshev_nodes(degree)
+    return spectral.cumulative_integration_matrix(degree) * stretch(xi, layer_width)

@@ -123,7 +123,7 @@ def _planar_arrays(n: int, support: str, quad_degree: int, layer_width: float | 
         interp[:, free],
         (interp @ diff)[:, free] / quad_stretch[:, None],
         np.eye(n + 1)[:, free],
-        spectral.cumulative_integration_matrix(n) * grid_map.stretch(nodes, layer_width),
+        grid_map.cumulative_integration(n, layer_width),
     )
 
 

@@ -85,8 +85,8 @@ def fit_twist_folds(rod: TwistedRod, vary: str, vary_range: tuple[float, float],
             ev = _folds_at(rod, vary, vary_range, turns, free, p, count, start, options)
         except (ParameterError, ArithmeticError):
             return None
-        if len(ev.folds) < count:
-            return None
+        if len(ev.folds) < count or not all(f.converged for f in ev.folds[:count]):
+            return None  # a fold missing or not refined: the data would be misread
         values = np.array([f.value for f in ev.folds[:count]])
         r = np.where(mask, (values - np.nan_to_num(measured)) / sigma, 0.0)
         return ev, values, r
@@ -139,7 +139,7 @@ def _jacobian(ev: _Evaluation, vary, free, mask, sigma) -> np.ndarray:
 def _record(free, p, J, r, values, measured, mask, sigma, vary_range, converged,
             iterations, reason, resolved) -> SceneFit:
     """The fit's ``SceneFit`` (``jaxrod.inverse.fit_record.record``: its covariance,
-    identifiability and warnings)."""
+    identifiability and warnings); its status UNDER_RESOLVED where a fold is."""
     count = len(measured)
     problem = types.SimpleNamespace(
         keys=free, free=free, data=measured, mask=mask, n_data=int(mask.sum()), n_priors=0,
@@ -153,5 +153,6 @@ def _record(free, p, J, r, values, measured, mask, sigma, vary_range, converged,
     reasons = [x for x in (reason, None if resolved else
                            "a fold is under-resolved (its Chebyshev tail above 1e-8: raise "
                            "n, or gather the grid with layer_width)") if x]
-    return dataclasses.replace(fit, converged=converged, status=Status.of(converged),
+    status = Status.of(converged) if resolved else Status.UNDER_RESOLVED
+    return dataclasses.replace(fit, converged=converged, status=status,
                                reason="; ".join(reasons) or None)

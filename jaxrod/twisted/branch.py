@@ -249,8 +249,9 @@ def twisted_equilibrium(rod: TwistedRod, turns: float, *, start: TwistState | No
 def folds_along(rod: TwistedRod, vary: str, vary_range: tuple[float, float], turns: float,
                 count: int, start: TwistState | None = None, **options: Any
                 ) -> tuple[list, TwistState | None, TwistBranch | None]:
-    """(the converged folds, the state at the range's start, the branch) along ``vary``
-    from ``vary_range[0]`` to ``vary_range[1]``, ending at the ``count``-th fold: the
+    """(the refined folds in the order met, each with its ``converged`` report, the state at
+    the range's start, the branch) along ``vary`` from ``vary_range[0]`` to
+    ``vary_range[1]``, ending at the ``count``-th fold: the
     start reached by ``twisted_equilibrium`` (from ``start``, a state at the range's start
     of a nearby rod, by Newton alone; None: by the rod's own path), the far end at
     ``turns`` where ``vary`` is another input. No branch (None) where the start fails
@@ -269,7 +270,7 @@ def folds_along(rod: TwistedRod, vary: str, vary_range: tuple[float, float], tur
         return [], first, None
     branch = twist_branch(first.rod, b, vary=vary, start=first, turns=first.turns,
                           **{"max_folds": count, **options})
-    return [f for f in branch.fold_points if f.converged], first, branch
+    return list(branch.fold_points), first, branch
 
 
 def _not_reached(branch: TwistBranch, turns: float) -> Exception:

@@ -16,13 +16,10 @@ autodiff of E_d as a whole (``jaxrod.twisted.equations``).
 from __future__ import annotations
 
 import dataclasses
-from functools import lru_cache
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
-from jaxrod import spectral
 from jaxrod.discretise import grid_map
 from jaxrod.discretise.framed import FramedDiscretisation, frame
 
@@ -49,17 +46,11 @@ def acts_on_positions(t) -> bool:
     return getattr(t, "framed_distributed", None) is not None
 
 
-@lru_cache(maxsize=16)
-def _cumulative(quad_degree: int, layer_width: float | None) -> np.ndarray:
-    xi = spectral.chebyshev_nodes(quad_degree)
-    return spectral.cumulative_integration_matrix(quad_degree) * grid_map.stretch(
-        xi, layer_width)
-
-
 def quad_positions(disc: FramedDiscretisation, layer_width: float | None) -> QuadPositions:
     """The positions' data on ``disc``'s quadrature grid (gathered by ``layer_width``)."""
     degree = int(disc.quad_nodes.shape[0]) - 1
-    return QuadPositions(jax.device_put(_cumulative(degree, layer_width)))
+    cumint = grid_map.cumulative_integration(degree, layer_width)
+    return QuadPositions(jax.device_put(cumint))
 
 
 def distributed_energy(x, turns, disc: FramedDiscretisation, inputs, loads: dict

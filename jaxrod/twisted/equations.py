@@ -134,11 +134,11 @@ def _linearise(w, aux, data, keys: tuple, count: int):
     nodes: Lambda = sum_j q_j phi(a_j) + Psi(X) - U mu_z (1 - e) + nu c . (x - x_ref),
     the jets a_j = L_j x + l_j turns; the Hessian is sum_j q_j L_j^T phi_aa L_j + D^T
     Psi_XX D (D = dX/dx) + sigma G G^T (the centring, G = dH/dx: ``TwistedRod.centred``)
-    + the self-contact's (``jaxrod.twisted.self_contact.contact_terms``) + the
-    Hessian of the loads that act on the positions along the rod (autodiff,
-    ``jaxrod.twisted.distributed``), bordered by the constraints' gradients and c; the column is the
-    residual's derivative along the path (forward mode). The same numbers as autodiff of
-    ``_lagrangian``, without its cost."""
+    + the self-contact's (``jaxrod.twisted.self_contact.contact_terms``) + the Hessian of
+    the loads that act on the positions along the rod (autodiff,
+    ``jaxrod.twisted.distributed``), bordered by the constraints' gradients and c; the
+    column is the residual's derivative along the path (forward mode). The same numbers
+    as autodiff of ``_lagrangian``, without its cost."""
     disc = data[0]
     _, c, on = aux
     L, q = disc.jet_matrix, disc.field.quad_weights
@@ -291,9 +291,8 @@ class _Path:
         """Whether the phase condition is on along the whole path: a symmetric rod
         (``TwistedRod.symmetric``) and a path that keeps it (the turns, the end's control,
         the twist ratio, the load scale, a load's strength or a taper's coefficients; a
-        field's angle or the
-        bending ratio would break it part way, where a phase condition would force
-        states that are no equilibria)."""
+        field's angle or the bending ratio would break it part way, where a phase
+        condition would force states that are no equilibria)."""
         keeps = ("turns", "tension", "shortening", "twist_ratio", "load_scale")
         return rod.symmetric and all(
             k in keeps or (k.count(".") == 1 and k.split(".")[1] in _STRENGTHS)

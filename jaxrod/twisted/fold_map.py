@@ -35,7 +35,7 @@ def _point_status(folds, branch) -> Status:
         return Status.NOT_CONVERGED
     if branch.status not in (int(REACHED_BOUND), int(Status.FOLDS_FOUND)):
         return Status(branch.status)
-    if len(folds) != len(branch.fold_points) or not all(p.converged for p in branch.points):
+    if not all(f.converged for f in folds) or not all(p.converged for p in branch.points):
         return Status.NOT_CONVERGED
     tails = [p.tail for p in branch.points] + [f.state.tail for f in folds]
     return Status.UNDER_RESOLVED if max(tails) > TOLERANCE else Status.SUCCESS
@@ -95,10 +95,9 @@ def twist_fold_map(rod: TwistedRod, vary: str, vary_range: tuple[float, float], 
                                                        **options)
                 start = state if state is not None and state.converged else None
                 count[j, i] = len(found)
-                if found:
-                    first[j, i] = found[0].value
-                if len(found) > 1:
-                    second[j, i] = found[1].value
+                for k, values in enumerate((first, second)):
+                    if len(found) > k and found[k].converged:
+                        values[j, i] = found[k].value
                 status[j, i] = int(_point_status(found, branch))
                 bar.update(1)
     except KeyboardInterrupt:

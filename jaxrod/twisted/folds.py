@@ -125,7 +125,8 @@ def fold_sensitivity(fold: TwistFold, vary: str, keys) -> np.ndarray:
     """d(fold's value of ``vary``)/d(key) for each of ``keys`` (module docstring):
     ``vary`` the input the fold's branch was followed in, each key an input of the rod
     ("turns" where ``vary`` is another). Raises ParameterError where the fold's null
-    direction is not isolated (``NULL_GAP``)."""
+    direction is not isolated (``NULL_GAP``) or the path crosses it (phi . R_v about 0: a
+    branch point)."""
     state = fold.state
     rod, disc = state.rod, state.rod.discretisation()
     size, count = disc.size, rod.constraints
@@ -144,6 +145,11 @@ def fold_sensitivity(fold: TwistFold, vary: str, keys) -> np.ndarray:
                              "state's slide (give the rod centred=True)")
     phi = vec[:, order[0]]
     r_v = np.asarray(_column_program(size, count, path.keys, phase, data, jnp.asarray(w)))
+    across = np.dot(phi, r_v[:len(phi)])
+    if not abs(across) > 1e-8 * np.linalg.norm(r_v):
+        raise ParameterError(f"fold at {vary} = {fold.value:.10g}: the path's derivative is "
+                             "orthogonal to the null direction (a branch point, not a fold): "
+                             "no sensitivity")
     out = []
     for key in keys:
         p_path, p_lam = _local(rod, key, state.turns)
@@ -152,5 +158,5 @@ def fold_sensitivity(fold: TwistFold, vary: str, keys) -> np.ndarray:
         r_p = np.asarray(_column_program(size, count, p_path.keys, phase,
                                          p_path.data(rod, state.turns, disc),
                                          jnp.asarray(wp)))
-        out.append(-np.dot(phi, r_p[:len(phi)]) / np.dot(phi, r_v[:len(phi)]))
+        out.append(-np.dot(phi, r_p[:len(phi)]) / across)
     return np.array(out)

@@ -157,6 +157,8 @@ class TwistedRod:
             raise ParameterError(f"n: an integer >= 8, got {self.n!r}")
         if not isinstance(self.loads, dict):
             raise ParameterError("loads: a dict of scene terms by name")
+        if sum(bool(getattr(t, "elastic", False)) for t in self.loads.values()) > 1:
+            raise ParameterError("loads: one taper (TaperedBending) at most")
         for name, t in self.loads.items():
             if not hasattr(t, "term_name") or (getattr(t, "elastic", False)
                                                and t.term_name != "tapered_bending"):

@@ -69,7 +69,7 @@ def _contact_arrays(n: int, layer_width: float | None, diameter: float, degree: 
     stretch = grid_map.stretch(xi, layer_width)
     weights = spectral.clenshaw_curtis_weights(degree) * stretch
     interp = spectral.interpolation_matrix(n, xi)[:, 1:n]  # both ends held: v = 0 there
-    cumint = spectral.cumulative_integration_matrix(degree) * stretch
+    cumint = grid_map.cumulative_integration(degree, layer_width)
     apart = np.abs(s[:, None] - s[None, :]) > EXCLUSION * diameter
     return interp, cumint, np.outer(weights, weights) * apart
 
